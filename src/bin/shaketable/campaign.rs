@@ -1,0 +1,8 @@
+//! `shaketable campaign` (not yet implemented).
+
+#[derive(clap::Args)]
+pub struct Args {}
+
+pub fn run(_args: Args) -> anyhow::Result<()> {
+    anyhow::bail!("`shaketable campaign` is not implemented yet")
+}

@@ -1,0 +1,1 @@
+//! Reading and writing campaigns on disk (campaign-format.md).

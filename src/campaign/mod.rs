@@ -1,0 +1,182 @@
+//! Measured data: the campaign format of `shared/spec/campaign-format.md`.
+//!
+//! `types` (this file) holds the in-memory campaign; `format` reads and writes it on
+//! disk with every bad-input rule of the format page; `synth` writes the paper's test
+//! program from any parameter set with seeded in-loop sensor noise.
+
+pub mod format;
+pub mod synth;
+
+use crate::model::{Inputs, Reference};
+use crate::params::{Controller, Params};
+use serde::{Deserialize, Serialize};
+use std::path::PathBuf;
+
+/// Manufacturer geometry known to the lab (`[geometry]` of campaign.toml).
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+pub struct Geometry {
+    pub piston_area_m2: f64,
+    pub total_oil_volume_m3: f64,
+    pub supply_pressure_pa: f64,
+    pub flow_gain_m3_s: f64,
+}
+
+impl Geometry {
+    pub fn from_params(p: &Params) -> Geometry {
+        Geometry {
+            piston_area_m2: p.actuator.piston_area_m2,
+            total_oil_volume_m3: p.actuator.total_oil_volume_m3,
+            supply_pressure_pa: p.actuator.supply_pressure_pa,
+            flow_gain_m3_s: p.actuator.flow_gain_m3_s,
+        }
+    }
+}
+
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum TestKind {
+    Random,
+    Sine,
+    Triangle,
+}
+
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum Control {
+    Displacement,
+    Acceleration,
+}
+
+/// Per-test override of any controller gain (`controller = { fv = 0.0 }`).
+#[derive(Debug, Clone, Copy, Default, PartialEq, Serialize, Deserialize)]
+pub struct ControllerOverride {
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub kp: Option<f64>,
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub kv: Option<f64>,
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub ka: Option<f64>,
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub fv: Option<f64>,
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub fa: Option<f64>,
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub kdp: Option<f64>,
+}
+
+impl ControllerOverride {
+    /// The campaign gains with this test's overrides applied.
+    pub fn apply(&self, base: &Controller) -> Controller {
+        Controller {
+            kp: self.kp.unwrap_or(base.kp),
+            kv: self.kv.unwrap_or(base.kv),
+            ka: self.ka.unwrap_or(base.ka),
+            fv: self.fv.unwrap_or(base.fv),
+            fa: self.fa.unwrap_or(base.fa),
+            kdp: self.kdp.unwrap_or(base.kdp),
+        }
+    }
+}
+
+/// One `[[test]]` entry of campaign.toml.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct TestSpec {
+    pub name: String,
+    pub file: String,
+    pub kind: TestKind,
+    pub control: Control,
+    /// Random tests: RMS level (m for displacement control, m/s^2 for acceleration).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub rms: Option<f64>,
+    /// Random tests: band `[low, high]`, Hz.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub band_hz: Option<[f64; 2]>,
+    /// Sine/triangle tests: frequency, Hz.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub frequency_hz: Option<f64>,
+    /// Sine/triangle tests: displacement amplitude, m.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub amplitude_m: Option<f64>,
+    #[serde(default, skip_serializing_if = "is_default_override")]
+    pub controller: ControllerOverride,
+}
+
+fn is_default_override(o: &ControllerOverride) -> bool {
+    *o == ControllerOverride::default()
+}
+
+/// campaign.toml in memory.
+#[derive(Debug, Clone, PartialEq)]
+pub struct CampaignInfo {
+    pub name: String,
+    pub sample_rate_hz: f64,
+    pub geometry: Geometry,
+    pub controller: Controller,
+    pub tests: Vec<TestSpec>,
+}
+
+/// One recorded test: the channels of the CSV, SI units, uniform sampling.
+#[derive(Debug, Clone, Default, PartialEq)]
+pub struct Record {
+    pub time_s: Vec<f64>,
+    pub ref_displacement_m: Vec<f64>,
+    pub ref_velocity_m_s: Vec<f64>,
+    pub ref_acceleration_m_s2: Vec<f64>,
+    pub valve_command: Vec<f64>,
+    /// Absent in campaigns recorded without the spool LVDT.
+    pub spool_position: Option<Vec<f64>>,
+    pub displacement_m: Vec<f64>,
+    pub acceleration_m_s2: Vec<f64>,
+    pub force_n: Vec<f64>,
+    /// Further channels (`velocity_m_s`, `pressure_a_pa`, ...), kept in file order.
+    pub extra: Vec<(String, Vec<f64>)>,
+}
+
+impl Record {
+    pub fn len(&self) -> usize {
+        self.time_s.len()
+    }
+
+    pub fn is_empty(&self) -> bool {
+        self.time_s.is_empty()
+    }
+
+    /// The controller inputs at every sample (external force zero).
+    pub fn inputs(&self) -> Vec<Inputs> {
+        (0..self.len())
+            .map(|k| Inputs {
+                reference: Reference {
+                    displacement_m: self.ref_displacement_m[k],
+                    velocity_m_s: self.ref_velocity_m_s[k],
+                    acceleration_m_s2: self.ref_acceleration_m_s2[k],
+                },
+                external_force_n: 0.0,
+            })
+            .collect()
+    }
+}
+
+/// A campaign: where it lives, what campaign.toml says, and each test's record
+/// (in the order of the `[[test]]` list).
+#[derive(Debug, Clone, PartialEq)]
+pub struct Campaign {
+    pub dir: PathBuf,
+    pub info: CampaignInfo,
+    pub records: Vec<Record>,
+}
+
+impl Campaign {
+    /// The test spec and record named `name` (e.g. "R2"), if the campaign has it.
+    pub fn test(&self, name: &str) -> Option<(&TestSpec, &Record)> {
+        self.info
+            .tests
+            .iter()
+            .position(|t| t.name == name)
+            .map(|i| (&self.info.tests[i], &self.records[i]))
+    }
+
+    /// The controller gains in force during test `spec`.
+    pub fn controller_for(&self, spec: &TestSpec) -> Controller {
+        spec.controller.apply(&self.info.controller)
+    }
+}

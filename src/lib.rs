@@ -1,0 +1,14 @@
+//! shaketable: a servo-hydraulic uni-axial shake table (EUCENTRE TREES Lab) as a model,
+//! a simulator, an FMI 2.0 Co-Simulation FMU, and an identification/diagnosis toolkit.
+//!
+//! Flow: parameters -> model -> solver -> (FMU | CLI); campaign -> identification ->
+//! diagnosis -> report.
+
+pub mod campaign;
+pub mod model;
+pub mod params;
+pub mod solver;
+
+pub use model::{Inputs, Model, Outputs, Reference, SensorNoise};
+pub use params::Params;
+pub use solver::{simulate_record, Simulator};

@@ -1,0 +1,271 @@
+//! The physics of the table (spec sections 2-7): one derivative function over a fixed
+//! state vector. It knows nothing of files, FMI or the command line.
+//!
+//! The state vector has a fixed layout whatever the configuration; states of blocks
+//! that are switched off stay at zero with zero derivative. This keeps the hot path free
+//! of allocation and lets the FMU serialise every configuration the same way.
+
+pub mod actuator;
+pub mod controller;
+pub mod effects;
+pub mod friction;
+pub mod payload;
+pub mod servovalve;
+
+pub use controller::{Feedback, Reference};
+
+use crate::params::{Params, ServovalveModel};
+use actuator::Hydraulics;
+use effects::Oscillator;
+use friction::BoucWen;
+use payload::Payload;
+use servovalve::SpoolDynamics;
+
+/// Number of states.
+pub const NX: usize = 11;
+/// The state vector.
+pub type State = [f64; NX];
+
+/// Indices into [`State`].
+pub mod ix {
+    /// Spool position x_v (first/second-order valve).
+    pub const XV: usize = 0;
+    /// Spool velocity x_v' (second-order valve).
+    pub const XV_DOT: usize = 1;
+    /// Chamber pressure P_a (nonlinear) or load pressure P_L (ideal), Pa.
+    pub const PA: usize = 2;
+    /// Chamber pressure P_b (nonlinear), Pa.
+    pub const PB: usize = 3;
+    /// Absolute table displacement, m.
+    pub const X: usize = 4;
+    /// Absolute table velocity, m/s.
+    pub const V: usize = 5;
+    /// Bouc-Wen hysteretic variable Z.
+    pub const Z: usize = 6;
+    /// Absolute specimen displacement, m.
+    pub const XS: usize = 7;
+    /// Absolute specimen velocity, m/s.
+    pub const VS: usize = 8;
+    /// Reaction-mass displacement, m.
+    pub const XF: usize = 9;
+    /// Reaction-mass velocity, m/s.
+    pub const VF: usize = 10;
+}
+
+/// Sensor noise on the controller's feedback channels at one instant (spec section 2).
+#[derive(Debug, Clone, Copy, Default, PartialEq)]
+pub struct SensorNoise {
+    pub displacement_m: f64,
+    pub acceleration_m_s2: f64,
+    pub force_n: f64,
+}
+
+/// The inputs of the model at one instant.
+#[derive(Debug, Clone, Copy, Default, PartialEq)]
+pub struct Inputs {
+    pub reference: Reference,
+    /// Force applied to the table by a co-simulated body (FMU input), N.
+    pub external_force_n: f64,
+}
+
+/// What the table's sensors would read (noise-free), and the controller's command.
+#[derive(Debug, Clone, Copy, Default, PartialEq)]
+pub struct Outputs {
+    pub valve_command: f64,
+    pub spool_position: f64,
+    /// LVDT displacement relative to the reaction mass, m.
+    pub displacement_m: f64,
+    /// Table velocity relative to the reaction mass, m/s.
+    pub velocity_m_s: f64,
+    /// Absolute table acceleration, m/s^2.
+    pub acceleration_m_s2: f64,
+    pub actuator_force_n: f64,
+    pub pressure_a_pa: f64,
+    pub pressure_b_pa: f64,
+}
+
+/// The assembled model: every block's coefficients, computed once from [`Params`].
+#[derive(Debug, Clone)]
+pub struct Model {
+    pub params: Params,
+    pub valve: SpoolDynamics,
+    pub hydraulics: Hydraulics,
+    pub payload: Payload,
+    pub friction: BoucWen,
+    pub specimen: Oscillator,
+    pub foundation: Oscillator,
+}
+
+/// Forces and signals computed on the way to the derivatives.
+#[derive(Debug, Clone, Copy, Default)]
+pub struct Algebraic {
+    pub valve_command: f64,
+    pub spool_position: f64,
+    pub actuator_force_n: f64,
+    pub acceleration_m_s2: f64,
+    pub x_rel: f64,
+    pub v_rel: f64,
+}
+
+impl Model {
+    /// Assemble the model; the parameters must already be valid ([`Params::validate`]).
+    pub fn new(p: &Params) -> Model {
+        Model {
+            params: *p,
+            valve: SpoolDynamics::new(&p.servovalve),
+            hydraulics: Hydraulics::new(p),
+            payload: Payload::new(&p.table),
+            friction: BoucWen::new(&p.friction, &p.stick_slip),
+            specimen: Oscillator::specimen(&p.specimen),
+            foundation: Oscillator::foundation(&p.foundation),
+        }
+    }
+
+    /// True when the spool is a pure delay of the command (needs the solver's history).
+    pub fn has_delay(&self) -> bool {
+        self.valve.model == ServovalveModel::Delay
+    }
+
+    /// The table at rest: chambers at `P_s/2`, everything else zero.
+    pub fn rest_state(&self) -> State {
+        let mut s = [0.0; NX];
+        let (pa, pb) = self.hydraulics.rest_pressures();
+        s[ix::PA] = pa;
+        s[ix::PB] = pb;
+        s
+    }
+
+    /// Every signal that follows algebraically from the state and inputs: forces,
+    /// acceleration, the controller's command (on noisy feedback) and the spool.
+    /// `delayed_command` is `u(t - tau)` for the delay valve (ignored otherwise).
+    #[inline]
+    pub fn algebraic(
+        &self,
+        s: &State,
+        inp: &Inputs,
+        noise: &SensorNoise,
+        delayed_command: f64,
+    ) -> Algebraic {
+        let x_rel = s[ix::X] - s[ix::XF];
+        let v_rel = s[ix::V] - s[ix::VF];
+        let f_a = self.hydraulics.force(s[ix::PA], s[ix::PB]);
+        let f_d = self.friction.force(s[ix::Z], v_rel);
+        let f_e = self.payload.elastic_force(x_rel);
+        let f_s = if self.specimen.enabled {
+            -self
+                .specimen
+                .restoring_force(s[ix::XS] - s[ix::X], s[ix::VS] - s[ix::V])
+        } else {
+            0.0
+        };
+        let a = self
+            .payload
+            .acceleration(f_a - f_d - f_e + f_s + inp.external_force_n);
+        let feedback = Feedback {
+            displacement_m: x_rel + noise.displacement_m,
+            velocity_m_s: v_rel,
+            acceleration_m_s2: a + noise.acceleration_m_s2,
+            force_n: f_a + noise.force_n,
+        };
+        let u = controller::valve_command(&self.params.controller, &inp.reference, &feedback);
+        let xv = match self.valve.model {
+            ServovalveModel::Delay => self.valve.gain * delayed_command,
+            _ => s[ix::XV],
+        };
+        Algebraic {
+            valve_command: u,
+            spool_position: xv,
+            actuator_force_n: f_a,
+            acceleration_m_s2: a,
+            x_rel,
+            v_rel,
+        }
+    }
+
+    /// The derivative function `ds = f(s, inputs)`; returns the algebraic signals.
+    /// Allocation-free: it is the solver's hot path.
+    #[inline]
+    pub fn derivatives(
+        &self,
+        s: &State,
+        inp: &Inputs,
+        noise: &SensorNoise,
+        delayed_command: f64,
+        ds: &mut State,
+    ) -> Algebraic {
+        let alg = self.algebraic(s, inp, noise, delayed_command);
+        // spool (section 3)
+        let (dxv, dxv_dot) = self
+            .valve
+            .derivatives(alg.valve_command, s[ix::XV], s[ix::XV_DOT]);
+        ds[ix::XV] = dxv;
+        ds[ix::XV_DOT] = dxv_dot;
+        // oil column (section 4)
+        let (dpa, dpb) = self.hydraulics.pressure_rates(
+            alg.spool_position,
+            s[ix::PA],
+            s[ix::PB],
+            alg.x_rel,
+            alg.v_rel,
+        );
+        ds[ix::PA] = dpa;
+        ds[ix::PB] = dpb;
+        // table (section 5)
+        ds[ix::X] = s[ix::V];
+        ds[ix::V] = alg.acceleration_m_s2;
+        // friction (eq. 4.15) on the stroke velocity
+        ds[ix::Z] = self.friction.z_rate(s[ix::Z], alg.v_rel);
+        // specimen (section 7)
+        if self.specimen.enabled {
+            ds[ix::XS] = s[ix::VS];
+            ds[ix::VS] = self
+                .specimen
+                .restoring_force(s[ix::XS] - s[ix::X], s[ix::VS] - s[ix::V])
+                / self.specimen.mass_kg;
+        } else {
+            ds[ix::XS] = 0.0;
+            ds[ix::VS] = 0.0;
+        }
+        // foundation (section 7): actuator, friction and stiffness push it back
+        if self.foundation.enabled {
+            let reaction = -(alg.actuator_force_n
+                - self.friction.force(s[ix::Z], alg.v_rel)
+                - self.payload.elastic_force(alg.x_rel));
+            ds[ix::XF] = s[ix::VF];
+            ds[ix::VF] = (reaction + self.foundation.restoring_force(s[ix::XF], s[ix::VF]))
+                / self.foundation.mass_kg;
+        } else {
+            ds[ix::XF] = 0.0;
+            ds[ix::VF] = 0.0;
+        }
+        alg
+    }
+
+    /// Sensor readings (noise-free) for a state; the command uses the noisy feedback.
+    pub fn outputs(
+        &self,
+        s: &State,
+        inp: &Inputs,
+        noise: &SensorNoise,
+        delayed_command: f64,
+    ) -> Outputs {
+        let alg = self.algebraic(s, inp, noise, delayed_command);
+        let (pa, pb) = self.hydraulics.chamber_pressures(s[ix::PA], s[ix::PB]);
+        Outputs {
+            valve_command: alg.valve_command,
+            spool_position: alg.spool_position,
+            displacement_m: alg.x_rel,
+            velocity_m_s: alg.v_rel,
+            acceleration_m_s2: alg.acceleration_m_s2,
+            actuator_force_n: alg.actuator_force_n,
+            pressure_a_pa: pa,
+            pressure_b_pa: pb,
+        }
+    }
+
+    /// Keep the state physical after a step: Bouc-Wen `Z` in [-1, 1] (section 5).
+    #[inline]
+    pub fn project(&self, s: &mut State) {
+        s[ix::Z] = s[ix::Z].clamp(-1.0, 1.0);
+    }
+}

@@ -1,0 +1,688 @@
+//! Typed parameter blocks of the table model, their TREES Lab defaults (spec section 6),
+//! TOML reading/writing and validation.
+//!
+//! A parameter file may hold only the keys that differ from the defaults; every missing
+//! key takes its TREES Lab default. An unknown key is an error (it is nearly always a typo
+//! that would otherwise be silently ignored).
+
+use serde::{Deserialize, Serialize};
+use std::path::Path;
+
+/// Errors from reading or validating a parameter file.
+#[derive(Debug, thiserror::Error)]
+pub enum ParamsError {
+    #[error("{file}: cannot read: {source}")]
+    Io {
+        file: String,
+        source: std::io::Error,
+    },
+    #[error("{file}: {message}")]
+    Parse { file: String, message: String },
+    #[error("{file}: key `{key}` = {value}: {rule}")]
+    Invalid {
+        file: String,
+        key: String,
+        value: f64,
+        rule: String,
+    },
+}
+
+/// Three-variable controller gains (spec section 2).
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+#[serde(default, deny_unknown_fields)]
+pub struct Controller {
+    /// Displacement feedback Kp, 1/m.
+    pub kp: f64,
+    /// Velocity feedback Kv, s/m.
+    pub kv: f64,
+    /// Acceleration feedback Ka, s^2/m.
+    pub ka: f64,
+    /// Velocity feed-forward Fv, s/m.
+    pub fv: f64,
+    /// Acceleration feed-forward Fa, s^2/m.
+    pub fa: f64,
+    /// Delta-P (force) stabilisation Kdp, 1/N.
+    pub kdp: f64,
+}
+
+impl Default for Controller {
+    fn default() -> Self {
+        Controller {
+            kp: 10.0,
+            kv: 0.0,
+            ka: 0.0,
+            fv: 0.4555,
+            fa: 0.0,
+            kdp: 3.293e-8,
+        }
+    }
+}
+
+/// Servovalve spool-dynamics variant (spec section 3).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum ServovalveModel {
+    Delay,
+    FirstOrder,
+    SecondOrder,
+}
+
+impl ServovalveModel {
+    pub const ALL: [ServovalveModel; 3] = [
+        ServovalveModel::Delay,
+        ServovalveModel::FirstOrder,
+        ServovalveModel::SecondOrder,
+    ];
+    pub fn name(self) -> &'static str {
+        match self {
+            ServovalveModel::Delay => "delay",
+            ServovalveModel::FirstOrder => "first_order",
+            ServovalveModel::SecondOrder => "second_order",
+        }
+    }
+}
+
+/// Servovalve parameters (spec section 3, paper eqs. 4.1-4.2).
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+#[serde(default, deny_unknown_fields)]
+pub struct Servovalve {
+    pub model: ServovalveModel,
+    /// Valve gain Ks (spool per unit command).
+    pub gain: f64,
+    /// Pure delay (`delay`) or time constant (`first_order`) tau, s.
+    pub time_constant_s: f64,
+    /// Natural frequency f_v of the `second_order` valve, Hz.
+    pub natural_frequency_hz: f64,
+    /// Damping ratio xi of the `second_order` valve.
+    pub damping_ratio: f64,
+}
+
+impl Default for Servovalve {
+    fn default() -> Self {
+        Servovalve {
+            model: ServovalveModel::SecondOrder,
+            gain: 1.0,
+            time_constant_s: 0.0137,
+            natural_frequency_hz: 20.5,
+            damping_ratio: 1.05,
+        }
+    }
+}
+
+/// Actuator variant (spec section 4).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum ActuatorModel {
+    Ideal,
+    Nonlinear,
+}
+
+impl ActuatorModel {
+    pub const ALL: [ActuatorModel; 2] = [ActuatorModel::Ideal, ActuatorModel::Nonlinear];
+    pub fn name(self) -> &'static str {
+        match self {
+            ActuatorModel::Ideal => "ideal",
+            ActuatorModel::Nonlinear => "nonlinear",
+        }
+    }
+}
+
+/// Actuator, oil column and valve flow (spec section 4).
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+#[serde(default, deny_unknown_fields)]
+pub struct Actuator {
+    pub model: ActuatorModel,
+    /// Piston area A, m^2.
+    pub piston_area_m2: f64,
+    /// Total oil volume V_t of both chambers, m^3.
+    pub total_oil_volume_m3: f64,
+    /// Effective bulk modulus beta, Pa.
+    pub bulk_modulus_pa: f64,
+    /// Cross-port leakage coefficient C_l, m^3/(s Pa).
+    pub leakage_m3_s_pa: f64,
+    /// Valve flow gain Kq, m^3/s per unit spool.
+    pub flow_gain_m3_s: f64,
+    /// Supply pressure P_s, Pa.
+    pub supply_pressure_pa: f64,
+}
+
+impl Default for Actuator {
+    fn default() -> Self {
+        Actuator {
+            model: ActuatorModel::Ideal,
+            piston_area_m2: 0.0911,
+            total_oil_volume_m3: 0.12101,
+            bulk_modulus_pa: 1.192e9,
+            leakage_m3_s_pa: 1.5184e-10,
+            flow_gain_m3_s: 0.2,
+            supply_pressure_pa: 28.0e6,
+        }
+    }
+}
+
+impl Actuator {
+    /// Oil-column stiffness k_oil = 4 beta A^2 / V_t (spec section 4), N/m.
+    pub fn oil_column_stiffness_n_m(&self) -> f64 {
+        4.0 * self.bulk_modulus_pa * self.piston_area_m2.powi(2) / self.total_oil_volume_m3
+    }
+}
+
+/// Rigid table (payload) mass and horizontal stiffness (spec section 5).
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+#[serde(default, deny_unknown_fields)]
+pub struct Table {
+    /// Rigid moving mass M, kg.
+    pub mass_kg: f64,
+    /// Horizontal stiffness k_h, N/m.
+    pub stiffness_n_m: f64,
+}
+
+impl Default for Table {
+    fn default() -> Self {
+        Table {
+            mass_kg: 41_258.0,
+            stiffness_n_m: 0.0,
+        }
+    }
+}
+
+/// Bouc-Wen viscoplastic friction (paper eqs. 4.14-4.15).
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+#[serde(default, deny_unknown_fields)]
+pub struct Friction {
+    /// Friction amplitude F_mu, N.
+    pub force_n: f64,
+    /// Equivalent yield displacement Y, m.
+    pub yield_displacement_m: f64,
+    /// Dimensionless shape constant b, in [0, 1): at b = 1 a saturated Z can never
+    /// leave +-1 again (eq. 4.15 has a fixed point there), so reversals would stick.
+    pub shape: f64,
+}
+
+impl Default for Friction {
+    fn default() -> Self {
+        Friction {
+            force_n: 4000.0,
+            yield_displacement_m: 1e-3,
+            shape: 0.5,
+        }
+    }
+}
+
+/// Flexible SDOF specimen on the table (spec section 7, `specimen`).
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+#[serde(default, deny_unknown_fields)]
+pub struct Specimen {
+    pub enabled: bool,
+    pub mass_kg: f64,
+    pub frequency_hz: f64,
+    pub damping_ratio: f64,
+}
+
+impl Default for Specimen {
+    fn default() -> Self {
+        Specimen {
+            enabled: false,
+            mass_kg: 10_000.0,
+            frequency_hz: 5.0,
+            damping_ratio: 0.02,
+        }
+    }
+}
+
+/// Compliant reaction mass (spec section 7, `foundation`).
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+#[serde(default, deny_unknown_fields)]
+pub struct Foundation {
+    pub enabled: bool,
+    pub mass_kg: f64,
+    pub frequency_hz: f64,
+    pub damping_ratio: f64,
+}
+
+impl Default for Foundation {
+    fn default() -> Self {
+        Foundation {
+            enabled: false,
+            mass_kg: 1.0e6,
+            frequency_hz: 20.0,
+            damping_ratio: 0.05,
+        }
+    }
+}
+
+/// Static friction above kinetic (spec section 7, `stick_slip`).
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+#[serde(default, deny_unknown_fields)]
+pub struct StickSlip {
+    pub enabled: bool,
+    /// r_s: static over kinetic friction.
+    pub static_ratio: f64,
+    /// v_s: Stribeck velocity, m/s.
+    pub stribeck_velocity_m_s: f64,
+}
+
+impl Default for StickSlip {
+    fn default() -> Self {
+        StickSlip {
+            enabled: false,
+            static_ratio: 2.0,
+            stribeck_velocity_m_s: 0.005,
+        }
+    }
+}
+
+/// Bounded valve/supply flow (spec section 7, `flow_saturation`).
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+#[serde(default, deny_unknown_fields)]
+pub struct FlowSaturation {
+    pub enabled: bool,
+    pub max_flow_m3_s: f64,
+}
+
+impl Default for FlowSaturation {
+    fn default() -> Self {
+        FlowSaturation {
+            enabled: false,
+            max_flow_m3_s: 0.1,
+        }
+    }
+}
+
+/// Spool overlap (spec section 7, `valve_deadband`).
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+#[serde(default, deny_unknown_fields)]
+pub struct ValveDeadband {
+    pub enabled: bool,
+    /// Deadband d as a fraction of full spool.
+    pub deadband: f64,
+}
+
+impl Default for ValveDeadband {
+    fn default() -> Self {
+        ValveDeadband {
+            enabled: false,
+            deadband: 0.02,
+        }
+    }
+}
+
+/// Every parameter of the table model: one block per part of the spec.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize, Default)]
+#[serde(default, deny_unknown_fields)]
+pub struct Params {
+    pub controller: Controller,
+    pub servovalve: Servovalve,
+    pub actuator: Actuator,
+    pub table: Table,
+    pub friction: Friction,
+    pub specimen: Specimen,
+    pub foundation: Foundation,
+    pub stick_slip: StickSlip,
+    pub flow_saturation: FlowSaturation,
+    pub valve_deadband: ValveDeadband,
+}
+
+/// Names of the catalogue effects (spec section 7), in catalogue order.
+pub const EFFECTS: [&str; 5] = [
+    "specimen",
+    "foundation",
+    "stick_slip",
+    "flow_saturation",
+    "valve_deadband",
+];
+
+impl Params {
+    /// TREES Lab defaults (spec section 6).
+    pub fn trees_lab() -> Params {
+        Params::default()
+    }
+
+    /// Parse TOML text; `file` names the source in errors.
+    pub fn from_toml_str(text: &str, file: &str) -> Result<Params, ParamsError> {
+        let p: Params = toml::from_str(text).map_err(|e| ParamsError::Parse {
+            file: file.to_string(),
+            message: e.to_string().trim_end().replace('\n', "\n  "),
+        })?;
+        p.validate_in(file)?;
+        Ok(p)
+    }
+
+    /// Read and validate a parameter file.
+    pub fn from_file(path: &Path) -> Result<Params, ParamsError> {
+        let file = path.display().to_string();
+        let text = std::fs::read_to_string(path).map_err(|source| ParamsError::Io {
+            file: file.clone(),
+            source,
+        })?;
+        Params::from_toml_str(&text, &file)
+    }
+
+    /// The complete parameter set as TOML (every key written).
+    pub fn to_toml_string(&self) -> String {
+        toml::to_string(self).expect("parameters always serialise to TOML")
+    }
+
+    /// Validate with `<memory>` as the source name.
+    pub fn validate(&self) -> Result<(), ParamsError> {
+        self.validate_in("<parameters>")
+    }
+
+    /// Check every physical rule; the first broken one is reported with its dotted key.
+    pub fn validate_in(&self, file: &str) -> Result<(), ParamsError> {
+        for (key, value) in self.numeric_entries() {
+            if !value.is_finite() {
+                return Err(invalid(file, key, value, "must be a finite number"));
+            }
+        }
+        use Rule::*;
+        let c = &self.servovalve;
+        let a = &self.actuator;
+        let mut rules: Vec<(&str, f64, Rule)> = vec![
+            ("servovalve.gain", c.gain, Positive),
+            ("actuator.piston_area_m2", a.piston_area_m2, Positive),
+            (
+                "actuator.total_oil_volume_m3",
+                a.total_oil_volume_m3,
+                Positive,
+            ),
+            ("actuator.bulk_modulus_pa", a.bulk_modulus_pa, Positive),
+            ("actuator.leakage_m3_s_pa", a.leakage_m3_s_pa, NonNegative),
+            ("actuator.flow_gain_m3_s", a.flow_gain_m3_s, Positive),
+            (
+                "actuator.supply_pressure_pa",
+                a.supply_pressure_pa,
+                Positive,
+            ),
+            ("table.mass_kg", self.table.mass_kg, Positive),
+            ("table.stiffness_n_m", self.table.stiffness_n_m, NonNegative),
+            ("friction.force_n", self.friction.force_n, NonNegative),
+            (
+                "friction.yield_displacement_m",
+                self.friction.yield_displacement_m,
+                Positive,
+            ),
+            ("friction.shape", self.friction.shape, HalfOpenUnit),
+        ];
+        match c.model {
+            ServovalveModel::Delay => {
+                rules.push(("servovalve.time_constant_s", c.time_constant_s, NonNegative))
+            }
+            ServovalveModel::FirstOrder => {
+                rules.push(("servovalve.time_constant_s", c.time_constant_s, Positive))
+            }
+            ServovalveModel::SecondOrder => {
+                rules.push((
+                    "servovalve.natural_frequency_hz",
+                    c.natural_frequency_hz,
+                    Positive,
+                ));
+                rules.push(("servovalve.damping_ratio", c.damping_ratio, NonNegative));
+            }
+        }
+        if self.specimen.enabled {
+            rules.push(("specimen.mass_kg", self.specimen.mass_kg, Positive));
+            rules.push((
+                "specimen.frequency_hz",
+                self.specimen.frequency_hz,
+                Positive,
+            ));
+            rules.push((
+                "specimen.damping_ratio",
+                self.specimen.damping_ratio,
+                NonNegative,
+            ));
+        }
+        if self.foundation.enabled {
+            rules.push(("foundation.mass_kg", self.foundation.mass_kg, Positive));
+            rules.push((
+                "foundation.frequency_hz",
+                self.foundation.frequency_hz,
+                Positive,
+            ));
+            rules.push((
+                "foundation.damping_ratio",
+                self.foundation.damping_ratio,
+                NonNegative,
+            ));
+        }
+        if self.stick_slip.enabled {
+            rules.push((
+                "stick_slip.static_ratio",
+                self.stick_slip.static_ratio,
+                AtLeastOne,
+            ));
+            rules.push((
+                "stick_slip.stribeck_velocity_m_s",
+                self.stick_slip.stribeck_velocity_m_s,
+                Positive,
+            ));
+        }
+        if self.flow_saturation.enabled {
+            rules.push((
+                "flow_saturation.max_flow_m3_s",
+                self.flow_saturation.max_flow_m3_s,
+                Positive,
+            ));
+        }
+        if self.valve_deadband.enabled {
+            rules.push((
+                "valve_deadband.deadband",
+                self.valve_deadband.deadband,
+                HalfOpenUnit,
+            ));
+        }
+        for (key, value, rule) in rules {
+            if let Some(text) = rule.broken_by(value) {
+                return Err(invalid(file, key, value, text));
+            }
+        }
+        Ok(())
+    }
+
+    /// Every numeric parameter with its dotted TOML key (for checks and reports).
+    pub fn numeric_entries(&self) -> Vec<(&'static str, f64)> {
+        let k = &self.controller;
+        let s = &self.servovalve;
+        let a = &self.actuator;
+        vec![
+            ("controller.kp", k.kp),
+            ("controller.kv", k.kv),
+            ("controller.ka", k.ka),
+            ("controller.fv", k.fv),
+            ("controller.fa", k.fa),
+            ("controller.kdp", k.kdp),
+            ("servovalve.gain", s.gain),
+            ("servovalve.time_constant_s", s.time_constant_s),
+            ("servovalve.natural_frequency_hz", s.natural_frequency_hz),
+            ("servovalve.damping_ratio", s.damping_ratio),
+            ("actuator.piston_area_m2", a.piston_area_m2),
+            ("actuator.total_oil_volume_m3", a.total_oil_volume_m3),
+            ("actuator.bulk_modulus_pa", a.bulk_modulus_pa),
+            ("actuator.leakage_m3_s_pa", a.leakage_m3_s_pa),
+            ("actuator.flow_gain_m3_s", a.flow_gain_m3_s),
+            ("actuator.supply_pressure_pa", a.supply_pressure_pa),
+            ("table.mass_kg", self.table.mass_kg),
+            ("table.stiffness_n_m", self.table.stiffness_n_m),
+            ("friction.force_n", self.friction.force_n),
+            (
+                "friction.yield_displacement_m",
+                self.friction.yield_displacement_m,
+            ),
+            ("friction.shape", self.friction.shape),
+            ("specimen.mass_kg", self.specimen.mass_kg),
+            ("specimen.frequency_hz", self.specimen.frequency_hz),
+            ("specimen.damping_ratio", self.specimen.damping_ratio),
+            ("foundation.mass_kg", self.foundation.mass_kg),
+            ("foundation.frequency_hz", self.foundation.frequency_hz),
+            ("foundation.damping_ratio", self.foundation.damping_ratio),
+            ("stick_slip.static_ratio", self.stick_slip.static_ratio),
+            (
+                "stick_slip.stribeck_velocity_m_s",
+                self.stick_slip.stribeck_velocity_m_s,
+            ),
+            (
+                "flow_saturation.max_flow_m3_s",
+                self.flow_saturation.max_flow_m3_s,
+            ),
+            ("valve_deadband.deadband", self.valve_deadband.deadband),
+        ]
+    }
+
+    /// Switch on a catalogue effect and set its parameters from `key=value` pairs
+    /// (the `--effect specimen:mass_kg=20000,frequency_hz=6` syntax of the command line).
+    pub fn apply_effect_spec(&mut self, spec: &str) -> Result<(), String> {
+        let (name, rest) = match spec.split_once(':') {
+            Some((n, r)) => (n.trim(), r.trim()),
+            None => (spec.trim(), ""),
+        };
+        if !EFFECTS.contains(&name) {
+            return Err(format!(
+                "unknown effect `{name}` in `{spec}`; known effects: {}",
+                EFFECTS.join(", ")
+            ));
+        }
+        let mut table: toml::Table =
+            toml::from_str(&self.to_toml_string()).map_err(|e| format!("internal: {e}"))?;
+        let block = table
+            .get_mut(name)
+            .and_then(|v| v.as_table_mut())
+            .ok_or_else(|| format!("internal: no block {name}"))?;
+        block.insert("enabled".into(), toml::Value::Boolean(true));
+        for pair in rest.split(',').filter(|s| !s.trim().is_empty()) {
+            let (k, v) = pair
+                .split_once('=')
+                .ok_or_else(|| format!("`{pair}` in `{spec}` is not key=value"))?;
+            let k = k.trim();
+            if k == "enabled" || !block.contains_key(k) {
+                let known: Vec<&String> = block.keys().filter(|x| *x != "enabled").collect();
+                return Err(format!(
+                    "effect `{name}` has no parameter `{k}`; it has {known:?}"
+                ));
+            }
+            let v: f64 = v
+                .trim()
+                .parse()
+                .map_err(|_| format!("`{name}.{k}` = `{v}` is not a number"))?;
+            block.insert(k.to_string(), toml::Value::Float(v));
+        }
+        let text = toml::to_string(&table).map_err(|e| format!("internal: {e}"))?;
+        *self =
+            Params::from_toml_str(&text, &format!("--effect {spec}")).map_err(|e| e.to_string())?;
+        Ok(())
+    }
+}
+
+fn invalid(file: &str, key: &str, value: f64, rule: &str) -> ParamsError {
+    ParamsError::Invalid {
+        file: file.to_string(),
+        key: key.to_string(),
+        value,
+        rule: rule.to_string(),
+    }
+}
+
+#[derive(Clone, Copy)]
+enum Rule {
+    Positive,
+    NonNegative,
+    HalfOpenUnit,
+    AtLeastOne,
+}
+
+impl Rule {
+    fn broken_by(self, v: f64) -> Option<&'static str> {
+        let ok = match self {
+            Rule::Positive => v > 0.0,
+            Rule::NonNegative => v >= 0.0,
+            Rule::HalfOpenUnit => (0.0..1.0).contains(&v),
+            Rule::AtLeastOne => v >= 1.0,
+        };
+        if ok {
+            None
+        } else {
+            Some(match self {
+                Rule::Positive => "must be > 0",
+                Rule::NonNegative => "must be >= 0",
+                Rule::HalfOpenUnit => "must be in [0, 1)",
+                Rule::AtLeastOne => "must be >= 1",
+            })
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn defaults_match_spec_section_6() {
+        let p = Params::trees_lab();
+        // V_t = 4 beta A^2 / (M (2 pi f_oil)^2) with f_oil = 14.169 Hz (spec section 6)
+        let w = 2.0 * std::f64::consts::PI * 14.169;
+        let vt = 4.0 * p.actuator.bulk_modulus_pa * p.actuator.piston_area_m2.powi(2)
+            / (p.table.mass_kg * w * w);
+        assert!((vt / p.actuator.total_oil_volume_m3 - 1.0).abs() < 1e-4);
+        // zeta_oil = (C_l/A) sqrt(beta M / V_t) = 0.0336
+        let z = p.actuator.leakage_m3_s_pa / p.actuator.piston_area_m2
+            * (p.actuator.bulk_modulus_pa * p.table.mass_kg / p.actuator.total_oil_volume_m3)
+                .sqrt();
+        assert!((z - 0.0336).abs() < 2e-4, "zeta_oil {z}");
+        // Fv = A / Kq, Kdp = 3e-9 / A
+        assert!((p.controller.fv - 0.0911 / 0.2).abs() < 1e-12);
+        assert!((p.controller.kdp - 3e-9 / 0.0911).abs() < 1e-11);
+    }
+
+    #[test]
+    fn toml_round_trip() {
+        let p = Params::trees_lab();
+        let q = Params::from_toml_str(&p.to_toml_string(), "x").unwrap();
+        assert_eq!(p, q);
+    }
+
+    #[test]
+    fn partial_file_takes_defaults() {
+        let p = Params::from_toml_str("[table]\nmass_kg = 50000.0\n", "lab.toml").unwrap();
+        assert_eq!(p.table.mass_kg, 50000.0);
+        assert_eq!(p.actuator, Actuator::default());
+    }
+
+    #[test]
+    fn bad_values_name_file_key_and_rule() {
+        let e = Params::from_toml_str("[table]\nmass_kg = -1.0\n", "lab.toml").unwrap_err();
+        let m = e.to_string();
+        assert!(
+            m.contains("lab.toml") && m.contains("table.mass_kg") && m.contains("> 0"),
+            "{m}"
+        );
+        let e = Params::from_toml_str(
+            "[valve_deadband]\nenabled = true\ndeadband = 1.0\n",
+            "lab.toml",
+        )
+        .unwrap_err();
+        assert!(e.to_string().contains("[0, 1)"), "{e}");
+        let e = Params::from_toml_str("[table]\nmas_kg = 1.0\n", "lab.toml").unwrap_err();
+        let m = e.to_string();
+        assert!(
+            m.contains("lab.toml") && m.contains("mas_kg") && m.contains("line 2"),
+            "{m}"
+        );
+        let e = Params::from_toml_str("[friction]\nshape = 2.0\n", "f.toml").unwrap_err();
+        assert!(e.to_string().contains("friction.shape"), "{e}");
+        let e = Params::from_toml_str("[servovalve]\nmodel = \"third\"\n", "f.toml").unwrap_err();
+        assert!(e.to_string().contains("third"), "{e}");
+    }
+
+    #[test]
+    fn effect_spec_parses_and_validates() {
+        let mut p = Params::trees_lab();
+        p.apply_effect_spec("specimen:mass_kg=20000,frequency_hz=6,damping_ratio=0.02")
+            .unwrap();
+        assert!(p.specimen.enabled);
+        assert_eq!(p.specimen.mass_kg, 20000.0);
+        assert_eq!(p.specimen.frequency_hz, 6.0);
+        assert!(p.apply_effect_spec("specimen:mass=1").is_err());
+        assert!(p.apply_effect_spec("wobble:x=1").is_err());
+        assert!(p.apply_effect_spec("valve_deadband:deadband=1.5").is_err());
+    }
+}
