@@ -5,8 +5,13 @@
 //! diagnosis -> report.
 
 pub mod campaign;
+pub mod diagnose;
+pub mod fmi;
+pub mod identify;
+pub mod linear;
 pub mod model;
 pub mod params;
+pub mod report;
 pub mod solver;
 
 pub use model::{Inputs, Model, Outputs, Reference, SensorNoise};

@@ -1,0 +1,1 @@
+//! Diagnosis: residuals of the identified baseline, candidate effects, selection.

@@ -1,0 +1,1 @@
+//! Linearisation at rest, closed-loop poles and analytic transfer functions (nalgebra).

@@ -1,0 +1,1 @@
+//! Figures (plotters) and Markdown/HTML report pages.
