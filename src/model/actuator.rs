@@ -28,6 +28,8 @@ pub struct Hydraulics {
     /// Orifice coefficient `Kv = Kq / sr(P_s/2)`, so that the nonlinear actuator
     /// linearised at rest has exactly the flow gain Kq of the ideal one.
     pub orifice: f64,
+    /// `4 beta / V_t`, the ideal actuator's pressure-rate coefficient.
+    pub ideal_rate: f64,
     /// `Some(Q_max)` when flow saturation is on.
     pub max_flow: Option<f64>,
     /// Deadband d, 0 when off.
@@ -45,6 +47,7 @@ impl Hydraulics {
             leakage: a.leakage_m3_s_pa,
             flow_gain: a.flow_gain_m3_s,
             supply_pa: a.supply_pressure_pa,
+            ideal_rate: 4.0 * a.bulk_modulus_pa / a.total_oil_volume_m3,
             orifice: a.flow_gain_m3_s / signed_root(a.supply_pressure_pa / 2.0),
             max_flow: p
                 .flow_saturation
@@ -89,8 +92,7 @@ impl Hydraulics {
             ActuatorModel::Ideal => {
                 // (V_t / 4 beta) P_L' = Kq x_v - A v - C_l P_L
                 let q = self.saturate(self.flow_gain * opening);
-                let rate = 4.0 * self.bulk_modulus_pa / self.volume_m3
-                    * (q - a * v_rel - self.leakage * pa);
+                let rate = self.ideal_rate * (q - a * v_rel - self.leakage * pa);
                 (rate, 0.0)
             }
             ActuatorModel::Nonlinear => {

@@ -8,6 +8,8 @@ pub struct BoucWen {
     pub force_n: f64,
     pub yield_displacement_m: f64,
     pub shape: f64,
+    /// `1/Y`, precomputed.
+    pub inv_yield: f64,
     /// `(r_s - 1)` when stick-slip is on, else 0.
     pub static_excess: f64,
     /// `1 / v_s^2` of the Stribeck term.
@@ -25,6 +27,7 @@ impl BoucWen {
             force_n: f.force_n,
             yield_displacement_m: f.yield_displacement_m,
             shape: f.shape,
+            inv_yield: 1.0 / f.yield_displacement_m,
             static_excess,
             inv_stribeck_sq,
         }
@@ -52,6 +55,6 @@ impl BoucWen {
         } else {
             0.0
         };
-        (1.0 - z * z * (b + (1.0 - b) * sign)) * v / self.yield_displacement_m
+        (1.0 - z * z * (b + (1.0 - b) * sign)) * v * self.inv_yield
     }
 }

@@ -5,6 +5,8 @@ use crate::params::Table;
 #[derive(Debug, Clone, Copy)]
 pub struct Payload {
     pub mass_kg: f64,
+    /// `1/M`, precomputed: the derivative function multiplies instead of dividing.
+    pub inv_mass: f64,
     pub stiffness_n_m: f64,
 }
 
@@ -12,6 +14,7 @@ impl Payload {
     pub fn new(t: &Table) -> Self {
         Payload {
             mass_kg: t.mass_kg,
+            inv_mass: 1.0 / t.mass_kg,
             stiffness_n_m: t.stiffness_n_m,
         }
     }
@@ -25,6 +28,6 @@ impl Payload {
     /// `M a = F_A - F_D - F_E + F_specimen + F_external` (spec section 5).
     #[inline]
     pub fn acceleration(&self, net_force_n: f64) -> f64 {
-        net_force_n / self.mass_kg
+        net_force_n * self.inv_mass
     }
 }

@@ -11,11 +11,19 @@ pub struct SpoolDynamics {
     pub tau_s: f64,
     pub omega_rad_s: f64,
     pub damping_ratio: f64,
+    /// `1/tau`, `w^2` and `2 xi w`, precomputed for the hot path.
+    inv_tau: f64,
+    omega_sq: f64,
+    two_xi_omega: f64,
 }
 
 impl SpoolDynamics {
     pub fn new(p: &Servovalve) -> Self {
+        let w = 2.0 * PI * p.natural_frequency_hz;
         SpoolDynamics {
+            inv_tau: 1.0 / p.time_constant_s,
+            omega_sq: w * w,
+            two_xi_omega: 2.0 * p.damping_ratio * w,
             model: p.model,
             gain: p.gain,
             tau_s: p.time_constant_s,
@@ -31,15 +39,12 @@ impl SpoolDynamics {
         match self.model {
             ServovalveModel::Delay => (0.0, 0.0),
             // eq. 4.1: tau x_v' + x_v = Ks u
-            ServovalveModel::FirstOrder => ((self.gain * u - xv) / self.tau_s, 0.0),
+            ServovalveModel::FirstOrder => ((self.gain * u - xv) * self.inv_tau, 0.0),
             // eq. 4.2: x_v'' + 2 xi w x_v' + w^2 x_v = w^2 Ks u
-            ServovalveModel::SecondOrder => {
-                let w = self.omega_rad_s;
-                (
-                    xv_dot,
-                    w * w * (self.gain * u - xv) - 2.0 * self.damping_ratio * w * xv_dot,
-                )
-            }
+            ServovalveModel::SecondOrder => (
+                xv_dot,
+                self.omega_sq * (self.gain * u - xv) - self.two_xi_omega * xv_dot,
+            ),
         }
     }
 }

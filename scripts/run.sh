@@ -1,0 +1,17 @@
+#!/usr/bin/env bash
+# README command 1: set up, build in release and run the main job on the built-in
+# TREES Lab defaults. Everything it writes goes to report/.
+set -euo pipefail
+ROOT="$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)"
+cd "$ROOT"
+source scripts/setup.sh
+
+echo "== build (release)"
+cargo build --release --locked
+BIN="$ROOT/target/release/shaketable"
+mkdir -p report
+
+echo
+echo "== 1. TREES Lab table: analytic closed-loop frequency response (spec section 6)"
+"$BIN" params --defaults > report/trees_lab.toml
+"$BIN" frf --params report/trees_lab.toml --out report/frf
