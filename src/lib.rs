@@ -4,6 +4,7 @@
 //! Flow: parameters -> model -> solver -> (FMU | CLI); campaign -> identification ->
 //! diagnosis -> report.
 
+pub mod benchmark;
 pub mod campaign;
 pub mod diagnose;
 pub mod fmi;

@@ -91,3 +91,57 @@ fn delay_valve_spool_is_the_delayed_command() {
         );
     }
 }
+
+/// RMS of `a - b` over RMS of `a`.
+fn relative_rms_change(a: &[f64], b: &[f64]) -> f64 {
+    let num: f64 = a.iter().zip(b).map(|(x, y)| (x - y).powi(2)).sum();
+    let den: f64 = a.iter().map(|x| x * x).sum();
+    (num / den).sqrt()
+}
+
+/// Issue 3, part 4: halving the sub-step changes every output of a full random test of the
+/// paper program (R2: 0.1 g, 0.5-50 Hz; R3: 0.05 g, 0.5-125 Hz; 92 s each) by less than
+/// 1e-6 of its RMS, for the default model and the nonlinear + specimen + foundation model.
+#[test]
+fn halving_the_substep_changes_outputs_by_less_than_1e_6_of_rms() {
+    use shaketable::campaign::synth;
+    for test in ["R2", "R3"] {
+        let spec = synth::paper_program(90.0)
+            .into_iter()
+            .find(|t| t.name == test)
+            .unwrap();
+        let r = synth::reference(&spec, 2, 11, 90.0, FS).unwrap();
+        let inputs: Vec<Inputs> = (0..r.len())
+            .map(|k| Inputs {
+                reference: Reference {
+                    displacement_m: r.displacement_m[k],
+                    velocity_m_s: r.velocity_m_s[k],
+                    acceleration_m_s2: r.acceleration_m_s2[k],
+                },
+                external_force_n: 0.0,
+            })
+            .collect();
+        for (name, params) in shaketable::benchmark::models() {
+            let m = Model::new(&params);
+            let a = simulate_record(&m, &inputs, FS, None, DEFAULT_MAX_SUBSTEP_S);
+            let b = simulate_record(&m, &inputs, FS, None, DEFAULT_MAX_SUBSTEP_S / 2.0);
+            let channels: [(&str, fn(&shaketable::Outputs) -> f64); 6] = [
+                ("valve_command", |o| o.valve_command),
+                ("spool_position", |o| o.spool_position),
+                ("displacement", |o| o.displacement_m),
+                ("acceleration", |o| o.acceleration_m_s2),
+                ("force", |o| o.actuator_force_n),
+                ("pressure_a", |o| o.pressure_a_pa - 14e6),
+            ];
+            for (channel, f) in channels {
+                let xa: Vec<f64> = a.iter().map(f).collect();
+                let xb: Vec<f64> = b.iter().map(f).collect();
+                let change = relative_rms_change(&xa, &xb);
+                assert!(
+                    change < 1e-6,
+                    "{test}, {name}: {channel} changes by {change:.2e} of its RMS"
+                );
+            }
+        }
+    }
+}

@@ -138,7 +138,7 @@ impl Model {
     /// Every signal that follows algebraically from the state and inputs: forces,
     /// acceleration, the controller's command (on noisy feedback) and the spool.
     /// `delayed_command` is `u(t - tau)` for the delay valve (ignored otherwise).
-    #[inline]
+    #[inline(always)]
     pub fn algebraic(
         &self,
         s: &State,
@@ -184,7 +184,7 @@ impl Model {
 
     /// The derivative function `ds = f(s, inputs)`; returns the algebraic signals.
     /// Allocation-free: it is the solver's hot path.
-    #[inline]
+    #[inline(always)]
     pub fn derivatives(
         &self,
         s: &State,

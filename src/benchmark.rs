@@ -1,0 +1,113 @@
+//! The workloads behind `shaketable bench` and `cargo bench`: real-time factors of the
+//! simulator (simulated seconds per wall second, one core) and the wall time of the
+//! whole paper campaign synthesis.
+
+use crate::campaign::synth::{self, SynthOptions};
+use crate::model::{Inputs, Reference};
+use crate::params::{ActuatorModel, Params};
+use crate::solver::{simulate_record, DEFAULT_MAX_SUBSTEP_S};
+use crate::Model;
+use std::time::Instant;
+
+/// The models benchmarked: the TREES Lab defaults, and the nonlinear actuator with a
+/// specimen and a compliant foundation.
+pub fn models() -> Vec<(&'static str, Params)> {
+    let default = Params::trees_lab();
+    let mut full = Params::trees_lab();
+    full.actuator.model = ActuatorModel::Nonlinear;
+    full.specimen.enabled = true;
+    full.foundation.enabled = true;
+    vec![
+        ("default", default),
+        ("nonlinear+specimen+foundation", full),
+    ]
+}
+
+/// The R2 reference of the paper program (0.1 g random, 0.5-50 Hz), `seconds` long.
+pub fn random_inputs(seconds: f64) -> Vec<Inputs> {
+    let spec = synth::paper_program(seconds)
+        .into_iter()
+        .find(|t| t.name == "R2")
+        .expect("the paper program has R2");
+    let r = synth::reference(&spec, 1, 1, seconds, synth::SAMPLE_RATE_HZ)
+        .expect("R2 of the paper program is a valid test");
+    (0..r.len())
+        .map(|k| Inputs {
+            reference: Reference {
+                displacement_m: r.displacement_m[k],
+                velocity_m_s: r.velocity_m_s[k],
+                acceleration_m_s2: r.acceleration_m_s2[k],
+            },
+            external_force_n: 0.0,
+        })
+        .collect()
+}
+
+/// One line of the benchmark table.
+#[derive(Debug, Clone)]
+pub struct BenchRow {
+    pub workload: String,
+    pub simulated_s: f64,
+    pub wall_s: f64,
+}
+
+impl BenchRow {
+    pub fn realtime_factor(&self) -> f64 {
+        self.simulated_s / self.wall_s
+    }
+}
+
+/// Simulate `inputs` with `params` at `max_substep_s`, best wall time of `repeats`.
+pub fn time_simulation(
+    params: &Params,
+    inputs: &[Inputs],
+    max_substep_s: f64,
+    repeats: usize,
+) -> f64 {
+    let model = Model::new(params);
+    (0..repeats.max(1))
+        .map(|_| {
+            let t0 = Instant::now();
+            let out = simulate_record(&model, inputs, synth::SAMPLE_RATE_HZ, None, max_substep_s);
+            std::hint::black_box(out);
+            t0.elapsed().as_secs_f64()
+        })
+        .fold(f64::INFINITY, f64::min)
+}
+
+/// The whole table: each model at the default sub-step and at twice it, then the paper
+/// campaign synthesis (906 s of table time, all cores rayon gives it, files not written).
+pub fn run(seconds: f64, repeats: usize) -> Vec<BenchRow> {
+    let inputs = random_inputs(seconds);
+    let simulated = inputs.len() as f64 / synth::SAMPLE_RATE_HZ;
+    let mut rows = Vec::new();
+    for (name, params) in models() {
+        for (label, h) in [
+            ("", DEFAULT_MAX_SUBSTEP_S),
+            (", sub-step x2", 2.0 * DEFAULT_MAX_SUBSTEP_S),
+        ] {
+            rows.push(BenchRow {
+                workload: format!("{name} (random R2{label})"),
+                simulated_s: simulated,
+                wall_s: time_simulation(&params, &inputs, h, repeats),
+            });
+        }
+    }
+    let opts = SynthOptions::default();
+    let program = synth::paper_program(opts.random_duration_s);
+    let table_time: f64 = program
+        .iter()
+        .map(|t| synth::test_duration_s(t, opts.random_duration_s))
+        .sum();
+    let t0 = Instant::now();
+    std::hint::black_box(synth::synthesise(&Params::trees_lab(), &opts, None));
+    rows.push(BenchRow {
+        workload: format!(
+            "paper campaign synthesis ({} threads)",
+            rayon::current_num_threads()
+        ),
+        simulated_s: table_time,
+        wall_s: t0.elapsed().as_secs_f64(),
+    });
+    rows
+}
