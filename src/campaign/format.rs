@@ -1,1 +1,1398 @@
-//! Reading and writing campaigns on disk (campaign-format.md).
+//! Reading and writing campaigns on disk (`shared/spec/campaign-format.md`).
+//!
+//! Every bad input is a [`CampaignError`] naming the file and the physical line (1-based,
+//! comment and blank lines counted) and, for campaign.toml, the key and the test; never a
+//! panic and never a silently wrong result. Floats are written with `ryu` (shortest
+//! round-trip representation), so a record read back is bit-for-bit the record written.
+//!
+//! Choices where the format page is silent:
+//! - campaign.toml: `name` may be omitted (the directory name is used); `sample_rate_hz`,
+//!   every `[geometry]` key, every `[controller]` gain and, per test, `name`, `file`,
+//!   `kind`, `control` (+ `rms`, `band_hz` for random, `frequency_hz`, `amplitude_m` for
+//!   sine/triangle) are required. Unknown keys are accepted and ignored, except inside
+//!   `[controller]` and a test's `controller = {...}` override, where an unknown gain
+//!   (e.g. a typo `Fv`) would silently change the physics, so it is an error.
+//! - Duplicate test names, two tests on one file, and a campaign without tests are errors.
+//! - CSV: blank lines and lines whose first non-blank character is `#` are skipped;
+//!   cells are trimmed and may be double-quoted; a duplicate channel name is an error.
+//! - Time: strictly increasing; the median step must match `1/sample_rate_hz` within
+//!   0.1 % (else "sample rate disagrees"), and every sample must lie within 1 % of a step
+//!   of its grid time `t0 + k/fs` (else "non-uniform time": gaps, jitter, drift). The
+//!   record may start at any t0.
+
+use super::{
+    Campaign, CampaignInfo, Control, ControllerOverride, Geometry, Record, TestKind, TestSpec,
+};
+use crate::params::Controller;
+use rayon::prelude::*;
+use std::collections::BTreeMap;
+use std::io::Write;
+use std::path::{Path, PathBuf};
+use toml::Spanned;
+
+/// Channels every record must have (campaign-format.md, "The CSV records").
+pub const REQUIRED_CHANNELS: [&str; 8] = [
+    "time_s",
+    "ref_displacement_m",
+    "ref_velocity_m_s",
+    "ref_acceleration_m_s2",
+    "valve_command",
+    "displacement_m",
+    "acceleration_m_s2",
+    "force_n",
+];
+
+/// Channels a reference-only file (input of `shaketable simulate`) must have.
+pub const REFERENCE_CHANNELS: [&str; 4] = [
+    "time_s",
+    "ref_displacement_m",
+    "ref_velocity_m_s",
+    "ref_acceleration_m_s2",
+];
+
+/// The optional spool channel.
+pub const SPOOL_CHANNEL: &str = "spool_position";
+
+/// Relative tolerance of the mean time step against `1/sample_rate_hz`.
+const RATE_TOLERANCE: f64 = 1e-3;
+/// Tolerance of each sample time against its grid time, in sample intervals.
+const GRID_TOLERANCE: f64 = 1e-2;
+
+/// Everything that can be wrong with a campaign on disk.
+#[derive(Debug, thiserror::Error)]
+pub enum CampaignError {
+    /// A file that cannot be read (missing, unreadable, not UTF-8).
+    #[error("{file}: cannot read: {source}")]
+    Read {
+        file: String,
+        source: std::io::Error,
+    },
+    /// A file or directory that cannot be written.
+    #[error("{file}: cannot write: {source}")]
+    Write {
+        file: String,
+        source: std::io::Error,
+    },
+    /// Bad content of a CSV record: ragged row, non-numeric or non-finite cell, time
+    /// column problems, missing channel, empty record.
+    #[error("{file}: line {line}: {message}")]
+    Csv {
+        file: String,
+        line: usize,
+        message: String,
+    },
+    /// Bad content of campaign.toml: syntax, missing or invalid key, unknown kind, ...
+    #[error("{file}: {}{message}", toml_context(*line, test, key))]
+    Toml {
+        file: String,
+        /// The line of the offending value, or of the `[[test]]`/`[table]` header for a
+        /// missing key; `None` only for a missing top-level key.
+        line: Option<usize>,
+        test: Option<String>,
+        key: Option<String>,
+        message: String,
+    },
+    /// An in-memory record or campaign that cannot be written in the format.
+    #[error("{file}: {message}")]
+    Invalid { file: String, message: String },
+}
+
+fn toml_context(line: Option<usize>, test: &Option<String>, key: &Option<String>) -> String {
+    let mut s = String::new();
+    if let Some(l) = line {
+        s.push_str(&format!("line {l}: "));
+    }
+    if let Some(t) = test {
+        s.push_str(&format!("test `{t}`: "));
+    }
+    if let Some(k) = key {
+        s.push_str(&format!("key `{k}`: "));
+    }
+    s
+}
+
+impl CampaignError {
+    /// The line the error points at, if it has one.
+    pub fn line(&self) -> Option<usize> {
+        match self {
+            CampaignError::Csv { line, .. } => Some(*line),
+            CampaignError::Toml { line, .. } => *line,
+            _ => None,
+        }
+    }
+
+    /// The file the error is about.
+    pub fn file(&self) -> &str {
+        match self {
+            CampaignError::Read { file, .. }
+            | CampaignError::Write { file, .. }
+            | CampaignError::Csv { file, .. }
+            | CampaignError::Toml { file, .. }
+            | CampaignError::Invalid { file, .. } => file,
+        }
+    }
+}
+
+fn display(p: &Path) -> String {
+    p.display().to_string()
+}
+
+fn read_text(path: &Path) -> Result<String, CampaignError> {
+    std::fs::read_to_string(path).map_err(|source| CampaignError::Read {
+        file: display(path),
+        source,
+    })
+}
+
+// ---------------------------------------------------------------------------------------
+// CSV records
+// ---------------------------------------------------------------------------------------
+
+/// A parsed CSV: channel names, columns, and the physical line of the header and of
+/// every data row.
+struct CsvTable {
+    names: Vec<String>,
+    columns: Vec<Vec<f64>>,
+    header_line: usize,
+    row_lines: Vec<usize>,
+}
+
+impl CsvTable {
+    fn index(&self, name: &str) -> Option<usize> {
+        self.names.iter().position(|n| n == name)
+    }
+
+    fn take(&mut self, name: &str) -> Option<Vec<f64>> {
+        self.index(name)
+            .map(|i| std::mem::take(&mut self.columns[i]))
+    }
+}
+
+fn unquote(cell: &str) -> &str {
+    let c = cell.trim();
+    if c.len() >= 2 && c.starts_with('"') && c.ends_with('"') {
+        c[1..c.len() - 1].trim()
+    } else {
+        c
+    }
+}
+
+/// Parse CSV text: header, rows, every cell a finite number, no ragged rows.
+fn parse_csv(text: &str, file: &str) -> Result<CsvTable, CampaignError> {
+    let err = |line: usize, message: String| CampaignError::Csv {
+        file: file.to_string(),
+        line,
+        message,
+    };
+    let mut names: Vec<String> = Vec::new();
+    let mut columns: Vec<Vec<f64>> = Vec::new();
+    let mut header_line = 0usize;
+    let mut row_lines = Vec::new();
+    let mut last_line = 0usize;
+    // a UTF-8 byte-order mark (spreadsheet exports) is not part of the first channel name
+    let text = text.strip_prefix('\u{feff}').unwrap_or(text);
+    for (i, raw) in text.split('\n').enumerate() {
+        let line_no = i + 1;
+        let line = raw.strip_suffix('\r').unwrap_or(raw);
+        let trimmed = line.trim_start();
+        if trimmed.is_empty() {
+            continue;
+        }
+        last_line = line_no;
+        if trimmed.starts_with('#') {
+            continue;
+        }
+        if header_line == 0 {
+            header_line = line_no;
+            for (j, cell) in line.split(',').enumerate() {
+                let name = unquote(cell);
+                if name.is_empty() {
+                    return Err(err(
+                        line_no,
+                        format!("header: column {} has no name", j + 1),
+                    ));
+                }
+                if names.iter().any(|n| n == name) {
+                    return Err(err(
+                        line_no,
+                        format!("header: channel `{name}` appears twice"),
+                    ));
+                }
+                if name.parse::<f64>().is_ok() {
+                    return Err(err(
+                        line_no,
+                        format!("header expected (channel names), found the number `{name}`"),
+                    ));
+                }
+                names.push(name.to_string());
+            }
+            let cap = text.len() / (line.len() + 1).max(8);
+            columns = (0..names.len()).map(|_| Vec::with_capacity(cap)).collect();
+            continue;
+        }
+        let mut n = 0usize;
+        for cell in line.split(',') {
+            if n >= names.len() {
+                let count = line.split(',').count();
+                return Err(err(
+                    line_no,
+                    format!(
+                        "ragged row: {count} cells but the header (line {header_line}) has {} channels",
+                        names.len()
+                    ),
+                ));
+            }
+            let c = unquote(cell);
+            let v: f64 = c.parse().map_err(|_| {
+                if c.is_empty() {
+                    err(line_no, format!("channel `{}`: empty cell", names[n]))
+                } else {
+                    err(
+                        line_no,
+                        format!("channel `{}`: `{c}` is not a number", names[n]),
+                    )
+                }
+            })?;
+            if !v.is_finite() {
+                return Err(err(
+                    line_no,
+                    format!(
+                        "channel `{}`: `{c}` is not finite (NaN or infinity)",
+                        names[n]
+                    ),
+                ));
+            }
+            columns[n].push(v);
+            n += 1;
+        }
+        if n != names.len() {
+            return Err(err(
+                line_no,
+                format!(
+                    "ragged row: {n} cells but the header (line {header_line}) has {} channels",
+                    names.len()
+                ),
+            ));
+        }
+        row_lines.push(line_no);
+    }
+    if header_line == 0 {
+        return Err(err(
+            last_line.max(1),
+            "empty record: no header line and no samples".to_string(),
+        ));
+    }
+    if row_lines.is_empty() {
+        return Err(err(
+            header_line,
+            "empty record: a header but no samples".to_string(),
+        ));
+    }
+    Ok(CsvTable {
+        names,
+        columns,
+        header_line,
+        row_lines,
+    })
+}
+
+fn require_channels(t: &CsvTable, required: &[&str], file: &str) -> Result<(), CampaignError> {
+    let missing: Vec<&str> = required
+        .iter()
+        .copied()
+        .filter(|c| t.index(c).is_none())
+        .collect();
+    if missing.is_empty() {
+        return Ok(());
+    }
+    Err(CampaignError::Csv {
+        file: file.to_string(),
+        line: t.header_line,
+        message: format!(
+            "missing required channel{} {} (the header has: {})",
+            if missing.len() > 1 { "s" } else { "" },
+            missing
+                .iter()
+                .map(|c| format!("`{c}`"))
+                .collect::<Vec<_>>()
+                .join(", "),
+            t.names.join(", ")
+        ),
+    })
+}
+
+/// Check the time column: strictly increasing, uniform at `sample_rate_hz` (or, when
+/// `None`, at the rate its mean step implies). Returns the sample rate.
+fn check_time(
+    t: &CsvTable,
+    time: &[f64],
+    sample_rate_hz: Option<f64>,
+    rate_source: &str,
+    file: &str,
+) -> Result<f64, CampaignError> {
+    let err = |line: usize, message: String| CampaignError::Csv {
+        file: file.to_string(),
+        line,
+        message,
+    };
+    let n = time.len();
+    for k in 1..n {
+        if time[k] <= time[k - 1] {
+            return Err(err(
+                t.row_lines[k],
+                format!(
+                    "time_s is not increasing: {} after {} (line {})",
+                    time[k],
+                    time[k - 1],
+                    t.row_lines[k - 1]
+                ),
+            ));
+        }
+    }
+    if n < 2 {
+        return match sample_rate_hz {
+            Some(fs) => Ok(fs),
+            None => Err(err(
+                t.row_lines[0],
+                "a single sample: the sample rate cannot be inferred from time_s".to_string(),
+            )),
+        };
+    }
+    // the typical step: the median, so that a gap or a jittered sample is reported as
+    // non-uniform time rather than as a wrong sample rate
+    let mut steps: Vec<f64> = time.windows(2).map(|w| w[1] - w[0]).collect();
+    let mid = steps.len() / 2;
+    let (_, &mut step, _) = steps.select_nth_unstable_by(mid, f64::total_cmp);
+    let fs = match sample_rate_hz {
+        Some(fs) => {
+            let dt = 1.0 / fs;
+            if ((step - dt) / dt).abs() > RATE_TOLERANCE {
+                return Err(err(
+                    t.row_lines[1],
+                    format!(
+                        "sample rate disagrees with the time column: time_s steps by {step} s \
+                         ({} Hz) but {rate_source} is {fs} Hz",
+                        1.0 / step
+                    ),
+                ));
+            }
+            fs
+        }
+        None => {
+            let fs = 1.0 / step;
+            if (fs - fs.round()).abs() < 1e-6 * fs {
+                fs.round()
+            } else {
+                fs
+            }
+        }
+    };
+    let dt = 1.0 / fs;
+    let t0 = time[0];
+    for (k, &tk) in time.iter().enumerate() {
+        let expected = t0 + k as f64 * dt;
+        if (tk - expected).abs() > GRID_TOLERANCE * dt {
+            return Err(err(
+                t.row_lines[k],
+                format!(
+                    "non-uniform time: sample {k} is at time_s = {tk} but uniform sampling at \
+                     {fs} Hz from {t0} puts it at {expected} (step here {} s, expected {dt} s)",
+                    if k > 0 { tk - time[k - 1] } else { 0.0 }
+                ),
+            ));
+        }
+    }
+    Ok(fs)
+}
+
+fn record_from_table(mut t: CsvTable) -> Record {
+    let mut take = |name: &str| t.take(name).unwrap_or_default();
+    let time_s = take("time_s");
+    let ref_displacement_m = take("ref_displacement_m");
+    let ref_velocity_m_s = take("ref_velocity_m_s");
+    let ref_acceleration_m_s2 = take("ref_acceleration_m_s2");
+    let valve_command = take("valve_command");
+    let displacement_m = take("displacement_m");
+    let acceleration_m_s2 = take("acceleration_m_s2");
+    let force_n = take("force_n");
+    let spool_position = t.take(SPOOL_CHANNEL);
+    let known: Vec<&str> = REQUIRED_CHANNELS
+        .iter()
+        .copied()
+        .chain(std::iter::once(SPOOL_CHANNEL))
+        .collect();
+    let extra = t
+        .names
+        .iter()
+        .zip(t.columns.iter_mut())
+        .filter(|(n, _)| !known.contains(&n.as_str()))
+        .map(|(n, c)| (n.clone(), std::mem::take(c)))
+        .collect();
+    Record {
+        time_s,
+        ref_displacement_m,
+        ref_velocity_m_s,
+        ref_acceleration_m_s2,
+        valve_command,
+        spool_position,
+        displacement_m,
+        acceleration_m_s2,
+        force_n,
+        extra,
+    }
+}
+
+/// Read one record, checking every rule of the format page against `sample_rate_hz`.
+pub fn read_record(path: &Path, sample_rate_hz: f64) -> Result<Record, CampaignError> {
+    let file = display(path);
+    let text = read_text(path)?;
+    read_record_str(&text, &file, sample_rate_hz, "sample_rate_hz")
+}
+
+/// [`read_record`] on text already in memory; `file` names it in errors and
+/// `rate_source` says where the sample rate came from (e.g. "campaign.toml sample_rate_hz").
+pub fn read_record_str(
+    text: &str,
+    file: &str,
+    sample_rate_hz: f64,
+    rate_source: &str,
+) -> Result<Record, CampaignError> {
+    let table = parse_csv(text, file)?;
+    require_channels(&table, &REQUIRED_CHANNELS, file)?;
+    let time = &table.columns[table.index("time_s").unwrap_or(0)];
+    check_time(&table, time, Some(sample_rate_hz), rate_source, file)?;
+    Ok(record_from_table(table))
+}
+
+/// The reference channels of a record: what `shaketable simulate` needs.
+#[derive(Debug, Clone, PartialEq)]
+pub struct ReferenceRecord {
+    pub sample_rate_hz: f64,
+    pub time_s: Vec<f64>,
+    pub ref_displacement_m: Vec<f64>,
+    pub ref_velocity_m_s: Vec<f64>,
+    pub ref_acceleration_m_s2: Vec<f64>,
+}
+
+impl ReferenceRecord {
+    /// The controller inputs at every sample (external force zero).
+    pub fn inputs(&self) -> Vec<crate::model::Inputs> {
+        (0..self.time_s.len())
+            .map(|k| crate::model::Inputs {
+                reference: crate::model::Reference {
+                    displacement_m: self.ref_displacement_m[k],
+                    velocity_m_s: self.ref_velocity_m_s[k],
+                    acceleration_m_s2: self.ref_acceleration_m_s2[k],
+                },
+                external_force_n: 0.0,
+            })
+            .collect()
+    }
+}
+
+/// Read only `time_s` and the three reference channels of a campaign-format CSV (other
+/// channels may be present or not). With `sample_rate_hz = None` the rate is inferred
+/// from the time column (which must still be uniform).
+pub fn read_reference(
+    path: &Path,
+    sample_rate_hz: Option<f64>,
+) -> Result<ReferenceRecord, CampaignError> {
+    let file = display(path);
+    let text = read_text(path)?;
+    let mut table = parse_csv(&text, &file)?;
+    require_channels(&table, &REFERENCE_CHANNELS, &file)?;
+    let time = table.take("time_s").unwrap_or_default();
+    let fs = check_time(
+        &table,
+        &time,
+        sample_rate_hz,
+        "the given sample rate",
+        &file,
+    )?;
+    Ok(ReferenceRecord {
+        sample_rate_hz: fs,
+        time_s: time,
+        ref_displacement_m: table.take("ref_displacement_m").unwrap_or_default(),
+        ref_velocity_m_s: table.take("ref_velocity_m_s").unwrap_or_default(),
+        ref_acceleration_m_s2: table.take("ref_acceleration_m_s2").unwrap_or_default(),
+    })
+}
+
+/// The channels of a record in file order: required ones, the spool (if any), extras.
+fn channels(record: &Record) -> Vec<(&str, &[f64])> {
+    let mut c: Vec<(&str, &[f64])> = vec![
+        ("time_s", &record.time_s),
+        ("ref_displacement_m", &record.ref_displacement_m),
+        ("ref_velocity_m_s", &record.ref_velocity_m_s),
+        ("ref_acceleration_m_s2", &record.ref_acceleration_m_s2),
+        ("valve_command", &record.valve_command),
+    ];
+    if let Some(s) = &record.spool_position {
+        c.push((SPOOL_CHANNEL, s));
+    }
+    c.push(("displacement_m", &record.displacement_m));
+    c.push(("acceleration_m_s2", &record.acceleration_m_s2));
+    c.push(("force_n", &record.force_n));
+    for (n, v) in &record.extra {
+        c.push((n.as_str(), v));
+    }
+    c
+}
+
+/// The CSV text of a record (header + one row per sample, ryu floats).
+pub fn record_to_csv(record: &Record, file: &str) -> Result<Vec<u8>, CampaignError> {
+    let cols = channels(record);
+    let n = record.len();
+    let invalid = |message: String| CampaignError::Invalid {
+        file: file.to_string(),
+        message,
+    };
+    if n == 0 {
+        return Err(invalid("empty record: no samples to write".to_string()));
+    }
+    let mut seen: Vec<&str> = Vec::with_capacity(cols.len());
+    for (name, col) in &cols {
+        if col.len() != n {
+            return Err(invalid(format!(
+                "channel `{name}` has {} samples but time_s has {n}",
+                col.len()
+            )));
+        }
+        if name.is_empty() || name.contains([',', '\n', '\r', '"']) || name.starts_with('#') {
+            return Err(invalid(format!(
+                "channel name `{name}` cannot be written in a CSV header"
+            )));
+        }
+        if seen.contains(name) {
+            return Err(invalid(format!("channel `{name}` appears twice")));
+        }
+        seen.push(name);
+    }
+    let mut out = Vec::with_capacity(n * cols.len() * 22 + 256);
+    out.extend_from_slice(seen.join(",").as_bytes());
+    out.push(b'\n');
+    let mut buf = ryu::Buffer::new();
+    for k in 0..n {
+        for (j, (name, col)) in cols.iter().enumerate() {
+            let v = col[k];
+            if !v.is_finite() {
+                return Err(invalid(format!(
+                    "channel `{name}` sample {k} (would be line {}) is {v}: not writable",
+                    k + 2
+                )));
+            }
+            if j > 0 {
+                out.push(b',');
+            }
+            out.extend_from_slice(buf.format_finite(v).as_bytes());
+        }
+        out.push(b'\n');
+    }
+    Ok(out)
+}
+
+/// Write one record as a campaign-format CSV.
+pub fn write_record(record: &Record, path: &Path) -> Result<(), CampaignError> {
+    let file = display(path);
+    let bytes = record_to_csv(record, &file)?;
+    write_bytes(path, &bytes)
+}
+
+fn write_bytes(path: &Path, bytes: &[u8]) -> Result<(), CampaignError> {
+    let werr = |source| CampaignError::Write {
+        file: display(path),
+        source,
+    };
+    let mut f = std::fs::File::create(path).map_err(werr)?;
+    f.write_all(bytes).map_err(werr)?;
+    f.flush().map_err(werr)
+}
+
+// ---------------------------------------------------------------------------------------
+// campaign.toml
+// ---------------------------------------------------------------------------------------
+
+type RawTable = BTreeMap<Spanned<String>, Spanned<toml::Value>>;
+
+#[derive(serde::Deserialize)]
+struct RawDoc {
+    name: Option<Spanned<toml::Value>>,
+    sample_rate_hz: Option<Spanned<toml::Value>>,
+    geometry: Option<Spanned<RawTable>>,
+    controller: Option<Spanned<RawTable>>,
+    test: Option<Spanned<Vec<Spanned<RawTable>>>>,
+}
+
+/// Line numbers from byte offsets.
+struct Lines<'a> {
+    text: &'a str,
+    file: &'a str,
+}
+
+impl Lines<'_> {
+    fn line(&self, offset: usize) -> usize {
+        let end = offset.min(self.text.len());
+        self.text.as_bytes()[..end]
+            .iter()
+            .filter(|&&b| b == b'\n')
+            .count()
+            + 1
+    }
+
+    fn err(
+        &self,
+        offset: Option<usize>,
+        test: Option<&str>,
+        key: Option<&str>,
+        message: impl Into<String>,
+    ) -> CampaignError {
+        CampaignError::Toml {
+            file: self.file.to_string(),
+            line: offset.map(|o| self.line(o)),
+            test: test.map(str::to_string),
+            key: key.map(str::to_string),
+            message: message.into(),
+        }
+    }
+}
+
+fn type_name(v: &toml::Value) -> &'static str {
+    match v {
+        toml::Value::String(_) => "a string",
+        toml::Value::Integer(_) => "an integer",
+        toml::Value::Float(_) => "a float",
+        toml::Value::Boolean(_) => "a boolean",
+        toml::Value::Datetime(_) => "a date",
+        toml::Value::Array(_) => "an array",
+        toml::Value::Table(_) => "a table",
+    }
+}
+
+fn as_number(v: &toml::Value) -> Option<f64> {
+    match v {
+        toml::Value::Float(f) => Some(*f),
+        toml::Value::Integer(i) => Some(*i as f64),
+        _ => None,
+    }
+}
+
+#[derive(Clone, Copy)]
+enum Check {
+    Positive,
+    Finite,
+}
+
+/// A number from a spanned value, checked.
+fn number(
+    lines: &Lines,
+    v: &Spanned<toml::Value>,
+    test: Option<&str>,
+    key: &str,
+    check: Check,
+) -> Result<f64, CampaignError> {
+    let off = Some(v.span().start);
+    let x = as_number(v.get_ref()).ok_or_else(|| {
+        lines.err(
+            off,
+            test,
+            Some(key),
+            format!("expected a number, found {}", type_name(v.get_ref())),
+        )
+    })?;
+    let ok = match check {
+        Check::Positive => x.is_finite() && x > 0.0,
+        Check::Finite => x.is_finite(),
+    };
+    if !ok {
+        let rule = match check {
+            Check::Positive => "must be a finite number > 0",
+            Check::Finite => "must be finite",
+        };
+        return Err(lines.err(off, test, Some(key), format!("{x} {rule}")));
+    }
+    Ok(x)
+}
+
+fn lookup<'t>(t: &'t RawTable, key: &str) -> Option<&'t Spanned<toml::Value>> {
+    t.iter().find(|(k, _)| k.get_ref() == key).map(|(_, v)| v)
+}
+
+/// A required number of a table whose header is at `table_off`.
+fn required_number(
+    lines: &Lines,
+    t: &RawTable,
+    table_off: usize,
+    test: Option<&str>,
+    key: &str,
+    check: Check,
+    what: &str,
+) -> Result<f64, CampaignError> {
+    match lookup(t, key) {
+        Some(v) => number(lines, v, test, key, check),
+        None => Err(lines.err(
+            Some(table_off),
+            test,
+            Some(key),
+            format!("required key is missing ({what})"),
+        )),
+    }
+}
+
+fn required_string<'t>(
+    lines: &Lines,
+    t: &'t RawTable,
+    table_off: usize,
+    test: Option<&str>,
+    key: &str,
+    what: &str,
+) -> Result<(&'t str, usize), CampaignError> {
+    match lookup(t, key) {
+        Some(v) => match v.get_ref() {
+            toml::Value::String(s) => Ok((s.as_str(), v.span().start)),
+            other => Err(lines.err(
+                Some(v.span().start),
+                test,
+                Some(key),
+                format!("expected a string, found {}", type_name(other)),
+            )),
+        },
+        None => Err(lines.err(
+            Some(table_off),
+            test,
+            Some(key),
+            format!("required key is missing ({what})"),
+        )),
+    }
+}
+
+const GAINS: [&str; 6] = ["kp", "kv", "ka", "fv", "fa", "kdp"];
+
+/// `[controller]`: every gain required, finite; unknown gains are errors.
+fn read_controller(lines: &Lines, c: &Spanned<RawTable>) -> Result<Controller, CampaignError> {
+    let off = c.span().start;
+    let t = c.get_ref();
+    for (k, _) in t.iter() {
+        if !GAINS.contains(&k.get_ref().as_str()) {
+            return Err(lines.err(
+                Some(k.span().start),
+                None,
+                Some(&format!("controller.{}", k.get_ref())),
+                format!(
+                    "unknown controller gain; the gains are {}",
+                    GAINS.join(", ")
+                ),
+            ));
+        }
+    }
+    let g = |key: &str| {
+        required_number(
+            lines,
+            t,
+            off,
+            None,
+            key,
+            Check::Finite,
+            "every TVC gain of spec section 2 must be given in [controller]",
+        )
+        .map_err(|e| rename_key(e, &format!("controller.{key}")))
+    };
+    Ok(Controller {
+        kp: g("kp")?,
+        kv: g("kv")?,
+        ka: g("ka")?,
+        fv: g("fv")?,
+        fa: g("fa")?,
+        kdp: g("kdp")?,
+    })
+}
+
+fn rename_key(e: CampaignError, new_key: &str) -> CampaignError {
+    match e {
+        CampaignError::Toml {
+            file,
+            line,
+            test,
+            message,
+            ..
+        } => CampaignError::Toml {
+            file,
+            line,
+            test,
+            key: Some(new_key.to_string()),
+            message,
+        },
+        other => other,
+    }
+}
+
+/// A test's `controller = { ... }` override.
+fn read_override(
+    lines: &Lines,
+    v: &Spanned<toml::Value>,
+    test: &str,
+) -> Result<ControllerOverride, CampaignError> {
+    let off = Some(v.span().start);
+    let toml::Value::Table(t) = v.get_ref() else {
+        return Err(lines.err(
+            off,
+            Some(test),
+            Some("controller"),
+            format!(
+                "expected a table of gains like {{ fv = 0.0 }}, found {}",
+                type_name(v.get_ref())
+            ),
+        ));
+    };
+    let mut o = ControllerOverride::default();
+    for (k, val) in t {
+        let key = format!("controller.{k}");
+        let x = as_number(val).ok_or_else(|| {
+            lines.err(
+                off,
+                Some(test),
+                Some(&key),
+                format!("expected a number, found {}", type_name(val)),
+            )
+        })?;
+        if !x.is_finite() {
+            return Err(lines.err(off, Some(test), Some(&key), format!("{x} must be finite")));
+        }
+        let slot = match k.as_str() {
+            "kp" => &mut o.kp,
+            "kv" => &mut o.kv,
+            "ka" => &mut o.ka,
+            "fv" => &mut o.fv,
+            "fa" => &mut o.fa,
+            "kdp" => &mut o.kdp,
+            _ => {
+                return Err(lines.err(
+                    off,
+                    Some(test),
+                    Some(&key),
+                    format!(
+                        "unknown controller gain; the gains are {}",
+                        GAINS.join(", ")
+                    ),
+                ))
+            }
+        };
+        *slot = Some(x);
+    }
+    Ok(o)
+}
+
+fn read_test(
+    lines: &Lines,
+    raw: &Spanned<RawTable>,
+    index: usize,
+    sample_rate_hz: f64,
+) -> Result<(TestSpec, usize), CampaignError> {
+    let off = raw.span().start;
+    let t = raw.get_ref();
+    let (name, _) = required_string(lines, t, off, None, "name", "every [[test]] needs a name")
+        .map_err(|e| match e {
+            CampaignError::Toml {
+                file,
+                line,
+                key,
+                message,
+                ..
+            } => CampaignError::Toml {
+                file,
+                line,
+                test: Some(format!("#{} (unnamed)", index + 1)),
+                key,
+                message,
+            },
+            other => other,
+        })?;
+    let name = name.to_string();
+    let tn = Some(name.as_str());
+    if name.trim().is_empty() {
+        return Err(lines.err(Some(off), tn, Some("name"), "test name is empty"));
+    }
+    let (file, file_off) = required_string(lines, t, off, tn, "file", "the CSV of the test")?;
+    if file.trim().is_empty() {
+        return Err(lines.err(Some(file_off), tn, Some("file"), "file name is empty"));
+    }
+    let (kind_s, kind_off) =
+        required_string(lines, t, off, tn, "kind", "random | sine | triangle")?;
+    let kind = match kind_s {
+        "random" => TestKind::Random,
+        "sine" => TestKind::Sine,
+        "triangle" => TestKind::Triangle,
+        other => {
+            return Err(lines.err(
+                Some(kind_off),
+                tn,
+                Some("kind"),
+                format!("unknown kind `{other}`; expected random | sine | triangle"),
+            ))
+        }
+    };
+    let (control_s, control_off) =
+        required_string(lines, t, off, tn, "control", "displacement | acceleration")?;
+    let control = match control_s {
+        "displacement" => Control::Displacement,
+        "acceleration" => Control::Acceleration,
+        other => {
+            return Err(lines.err(
+                Some(control_off),
+                tn,
+                Some("control"),
+                format!("unknown control `{other}`; expected displacement | acceleration"),
+            ))
+        }
+    };
+    let mut spec = TestSpec {
+        name: name.clone(),
+        file: file.to_string(),
+        kind,
+        control,
+        rms: None,
+        band_hz: None,
+        frequency_hz: None,
+        amplitude_m: None,
+        controller: ControllerOverride::default(),
+    };
+    let optional = |key: &str, check: Check| -> Result<Option<f64>, CampaignError> {
+        lookup(t, key)
+            .map(|v| number(lines, v, tn, key, check))
+            .transpose()
+    };
+    spec.rms = optional("rms", Check::Positive)?;
+    spec.frequency_hz = optional("frequency_hz", Check::Positive)?;
+    spec.amplitude_m = optional("amplitude_m", Check::Positive)?;
+    if let Some(v) = lookup(t, "band_hz") {
+        let voff = Some(v.span().start);
+        let bad = |m: String| lines.err(voff, tn, Some("band_hz"), m);
+        let toml::Value::Array(a) = v.get_ref() else {
+            return Err(bad(format!(
+                "expected [low, high] in Hz, found {}",
+                type_name(v.get_ref())
+            )));
+        };
+        let nums: Vec<f64> = a.iter().filter_map(as_number).collect();
+        if a.len() != 2 || nums.len() != 2 {
+            return Err(bad("expected two numbers [low, high] in Hz".to_string()));
+        }
+        let (lo, hi) = (nums[0], nums[1]);
+        if !(lo.is_finite() && hi.is_finite() && lo >= 0.0 && hi > lo) {
+            return Err(bad(format!("[{lo}, {hi}]: need 0 <= low < high")));
+        }
+        if hi > sample_rate_hz / 2.0 {
+            return Err(bad(format!(
+                "[{lo}, {hi}]: the band goes above the Nyquist frequency {} Hz of sample_rate_hz",
+                sample_rate_hz / 2.0
+            )));
+        }
+        spec.band_hz = Some([lo, hi]);
+    }
+    match kind {
+        TestKind::Random => {
+            let why = "a random test needs its level (m RMS for displacement control, m/s^2 RMS for acceleration control)";
+            if spec.rms.is_none() {
+                return Err(lines.err(
+                    Some(off),
+                    tn,
+                    Some("rms"),
+                    format!("required key is missing ({why})"),
+                ));
+            }
+            if spec.band_hz.is_none() {
+                return Err(lines.err(
+                    Some(off),
+                    tn,
+                    Some("band_hz"),
+                    "required key is missing (a random test needs its band [low, high] in Hz)",
+                ));
+            }
+        }
+        TestKind::Sine | TestKind::Triangle => {
+            let k = if kind == TestKind::Sine {
+                "sine"
+            } else {
+                "triangle"
+            };
+            if spec.frequency_hz.is_none() {
+                return Err(lines.err(
+                    Some(off),
+                    tn,
+                    Some("frequency_hz"),
+                    format!("required key is missing (a {k} test needs its frequency in Hz)"),
+                ));
+            }
+            if spec.amplitude_m.is_none() {
+                return Err(lines.err(
+                    Some(off),
+                    tn,
+                    Some("amplitude_m"),
+                    format!("required key is missing (a {k} test needs its displacement amplitude in m)"),
+                ));
+            }
+        }
+    }
+    if let Some(v) = lookup(t, "controller") {
+        spec.controller = read_override(lines, v, &name)?;
+    }
+    Ok((spec, file_off))
+}
+
+/// Parse campaign.toml text. `file` names it in errors; `default_name` is used when the
+/// file has no `name`. Returns the info and, per test, the line of its `file` key.
+pub fn parse_campaign_toml(
+    text: &str,
+    file: &str,
+    default_name: &str,
+) -> Result<(CampaignInfo, Vec<usize>), CampaignError> {
+    let lines = Lines { text, file };
+    let doc: RawDoc = toml::from_str(text).map_err(|e| {
+        let msg = e.message().trim().to_string();
+        lines.err(
+            e.span().map(|s| s.start),
+            None,
+            None,
+            format!("not valid TOML: {msg}"),
+        )
+    })?;
+    let name = match &doc.name {
+        Some(v) => match v.get_ref() {
+            toml::Value::String(s) => s.clone(),
+            other => {
+                return Err(lines.err(
+                    Some(v.span().start),
+                    None,
+                    Some("name"),
+                    format!("expected a string, found {}", type_name(other)),
+                ))
+            }
+        },
+        None => default_name.to_string(),
+    };
+    let sample_rate_hz = match &doc.sample_rate_hz {
+        Some(v) => number(&lines, v, None, "sample_rate_hz", Check::Positive)?,
+        None => {
+            return Err(lines.err(
+                None,
+                None,
+                Some("sample_rate_hz"),
+                "required key is missing (the sampling rate of every record, Hz)",
+            ))
+        }
+    };
+    let geometry = match &doc.geometry {
+        Some(g) => {
+            let off = g.span().start;
+            let get = |key: &str| {
+                required_number(
+                    &lines,
+                    g.get_ref(),
+                    off,
+                    None,
+                    key,
+                    Check::Positive,
+                    "manufacturer geometry, spec section 4",
+                )
+                .map_err(|e| rename_key(e, &format!("geometry.{key}")))
+            };
+            Geometry {
+                piston_area_m2: get("piston_area_m2")?,
+                total_oil_volume_m3: get("total_oil_volume_m3")?,
+                supply_pressure_pa: get("supply_pressure_pa")?,
+                flow_gain_m3_s: get("flow_gain_m3_s")?,
+            }
+        }
+        None => {
+            return Err(lines.err(
+                None,
+                None,
+                Some("geometry"),
+                "required table [geometry] is missing (piston_area_m2, total_oil_volume_m3, supply_pressure_pa, flow_gain_m3_s)",
+            ))
+        }
+    };
+    let controller = match &doc.controller {
+        Some(c) => read_controller(&lines, c)?,
+        None => {
+            return Err(lines.err(
+                None,
+                None,
+                Some("controller"),
+                "required table [controller] is missing (kp, kv, ka, fv, fa, kdp)",
+            ))
+        }
+    };
+    let raw_tests = match &doc.test {
+        Some(t) if !t.get_ref().is_empty() => t,
+        Some(t) => {
+            return Err(lines.err(
+                Some(t.span().start),
+                None,
+                Some("test"),
+                "the campaign has no tests",
+            ))
+        }
+        None => {
+            return Err(lines.err(
+                None,
+                None,
+                Some("test"),
+                "the campaign has no [[test]] entries",
+            ))
+        }
+    };
+    let mut tests: Vec<TestSpec> = Vec::new();
+    let mut file_lines = Vec::new();
+    let mut header_lines: Vec<usize> = Vec::new();
+    for (i, raw) in raw_tests.get_ref().iter().enumerate() {
+        let (spec, file_off) = read_test(&lines, raw, i, sample_rate_hz)?;
+        let here = lines.line(raw.span().start);
+        if let Some(j) = tests.iter().position(|t| t.name == spec.name) {
+            return Err(lines.err(
+                Some(raw.span().start),
+                Some(&spec.name),
+                Some("name"),
+                format!(
+                    "duplicate test name: already used by the test at line {}",
+                    header_lines[j]
+                ),
+            ));
+        }
+        if let Some(j) = tests.iter().position(|t| t.file == spec.file) {
+            return Err(lines.err(
+                Some(file_off),
+                Some(&spec.name),
+                Some("file"),
+                format!(
+                    "`{}` is already the file of test `{}` (line {})",
+                    spec.file, tests[j].name, file_lines[j]
+                ),
+            ));
+        }
+        header_lines.push(here);
+        file_lines.push(lines.line(file_off));
+        tests.push(spec);
+    }
+    Ok((
+        CampaignInfo {
+            name,
+            sample_rate_hz,
+            geometry,
+            controller,
+            tests,
+        },
+        file_lines,
+    ))
+}
+
+fn dir_name(dir: &Path) -> String {
+    dir.canonicalize()
+        .ok()
+        .as_deref()
+        .unwrap_or(dir)
+        .file_name()
+        .map(|s| s.to_string_lossy().into_owned())
+        .unwrap_or_else(|| "campaign".to_string())
+}
+
+/// Read and check `dir/campaign.toml` only (records are not opened).
+pub fn read_campaign_info(dir: &Path) -> Result<CampaignInfo, CampaignError> {
+    let path = dir.join("campaign.toml");
+    let text = read_text(&path)?;
+    Ok(parse_campaign_toml(&text, &display(&path), &dir_name(dir))?.0)
+}
+
+/// Read a whole campaign: campaign.toml and every record it lists, in parallel.
+pub fn read_campaign(dir: &Path) -> Result<Campaign, CampaignError> {
+    let toml_path = dir.join("campaign.toml");
+    let toml_file = display(&toml_path);
+    let text = read_text(&toml_path)?;
+    let (info, file_lines) = parse_campaign_toml(&text, &toml_file, &dir_name(dir))?;
+    let fs = info.sample_rate_hz;
+    let rate_source = format!("sample_rate_hz of {toml_file}");
+    let results: Vec<Result<Record, CampaignError>> = info
+        .tests
+        .par_iter()
+        .zip(file_lines.par_iter())
+        .map(|(spec, &line)| {
+            let path = dir.join(&spec.file);
+            let csv = match std::fs::read_to_string(&path) {
+                Ok(t) => t,
+                Err(source) => {
+                    return Err(CampaignError::Toml {
+                        file: toml_file.clone(),
+                        line: Some(line),
+                        test: Some(spec.name.clone()),
+                        key: Some("file".to_string()),
+                        message: format!("cannot read {}: {source}", display(&path)),
+                    })
+                }
+            };
+            read_record_str(&csv, &display(&path), fs, &rate_source)
+        })
+        .collect();
+    let mut records = Vec::with_capacity(results.len());
+    for r in results {
+        records.push(r?);
+    }
+    Ok(Campaign {
+        dir: dir.to_path_buf(),
+        info,
+        records,
+    })
+}
+
+fn toml_float(x: f64) -> String {
+    let mut b = ryu::Buffer::new();
+    b.format(x).to_string()
+}
+
+fn toml_string(s: &str) -> String {
+    toml::Value::String(s.to_string()).to_string()
+}
+
+/// campaign.toml text for `info` (floats written shortest round-trip).
+pub fn campaign_toml_string(info: &CampaignInfo) -> String {
+    let mut s = String::new();
+    s.push_str("# Campaign description (shared/spec/campaign-format.md).\n");
+    s.push_str(&format!("name = {}\n", toml_string(&info.name)));
+    s.push_str(&format!(
+        "sample_rate_hz = {}\n\n",
+        toml_float(info.sample_rate_hz)
+    ));
+    let g = &info.geometry;
+    s.push_str("[geometry]\n");
+    s.push_str(&format!(
+        "piston_area_m2 = {}\n",
+        toml_float(g.piston_area_m2)
+    ));
+    s.push_str(&format!(
+        "total_oil_volume_m3 = {}\n",
+        toml_float(g.total_oil_volume_m3)
+    ));
+    s.push_str(&format!(
+        "supply_pressure_pa = {}\n",
+        toml_float(g.supply_pressure_pa)
+    ));
+    s.push_str(&format!(
+        "flow_gain_m3_s = {}\n\n",
+        toml_float(g.flow_gain_m3_s)
+    ));
+    let c = &info.controller;
+    s.push_str("[controller]\n");
+    for (k, v) in [
+        ("kp", c.kp),
+        ("kv", c.kv),
+        ("ka", c.ka),
+        ("fv", c.fv),
+        ("fa", c.fa),
+        ("kdp", c.kdp),
+    ] {
+        s.push_str(&format!("{k} = {}\n", toml_float(v)));
+    }
+    for t in &info.tests {
+        s.push_str("\n[[test]]\n");
+        s.push_str(&format!("name = {}\n", toml_string(&t.name)));
+        s.push_str(&format!("file = {}\n", toml_string(&t.file)));
+        let kind = match t.kind {
+            TestKind::Random => "random",
+            TestKind::Sine => "sine",
+            TestKind::Triangle => "triangle",
+        };
+        let control = match t.control {
+            Control::Displacement => "displacement",
+            Control::Acceleration => "acceleration",
+        };
+        s.push_str(&format!("kind = \"{kind}\"\ncontrol = \"{control}\"\n"));
+        if let Some(x) = t.rms {
+            s.push_str(&format!("rms = {}\n", toml_float(x)));
+        }
+        if let Some([lo, hi]) = t.band_hz {
+            s.push_str(&format!(
+                "band_hz = [{}, {}]\n",
+                toml_float(lo),
+                toml_float(hi)
+            ));
+        }
+        if let Some(x) = t.frequency_hz {
+            s.push_str(&format!("frequency_hz = {}\n", toml_float(x)));
+        }
+        if let Some(x) = t.amplitude_m {
+            s.push_str(&format!("amplitude_m = {}\n", toml_float(x)));
+        }
+        let o = &t.controller;
+        let gains: Vec<String> = [
+            ("kp", o.kp),
+            ("kv", o.kv),
+            ("ka", o.ka),
+            ("fv", o.fv),
+            ("fa", o.fa),
+            ("kdp", o.kdp),
+        ]
+        .iter()
+        .filter_map(|(k, v)| v.map(|v| format!("{k} = {}", toml_float(v))))
+        .collect();
+        if !gains.is_empty() {
+            s.push_str(&format!("controller = {{ {} }}\n", gains.join(", ")));
+        }
+    }
+    s
+}
+
+/// Write `info` as `dir/campaign.toml`, creating `dir` if needed.
+pub fn write_campaign_info(info: &CampaignInfo, dir: &Path) -> Result<(), CampaignError> {
+    std::fs::create_dir_all(dir).map_err(|source| CampaignError::Write {
+        file: display(dir),
+        source,
+    })?;
+    let path = dir.join("campaign.toml");
+    let text = campaign_toml_string(info);
+    // what we write must read back (catches non-finite values, bad names, duplicates)
+    parse_campaign_toml(&text, &display(&path), &info.name).map_err(|e| {
+        CampaignError::Invalid {
+            file: display(&path),
+            message: format!("would not read back: {e}"),
+        }
+    })?;
+    write_bytes(&path, text.as_bytes())
+}
+
+/// Write a whole campaign into `dir`: campaign.toml and one CSV per test (in parallel).
+/// `campaign.dir` is ignored; `campaign.records[i]` goes to `dir/info.tests[i].file`.
+pub fn write_campaign(campaign: &Campaign, dir: &Path) -> Result<(), CampaignError> {
+    write_campaign_parts(&campaign.info, &campaign.records, dir)
+}
+
+/// [`write_campaign`] from its parts.
+pub fn write_campaign_parts(
+    info: &CampaignInfo,
+    records: &[Record],
+    dir: &Path,
+) -> Result<(), CampaignError> {
+    if records.len() != info.tests.len() {
+        return Err(CampaignError::Invalid {
+            file: display(&dir.join("campaign.toml")),
+            message: format!(
+                "{} tests listed but {} records given",
+                info.tests.len(),
+                records.len()
+            ),
+        });
+    }
+    write_campaign_info(info, dir)?;
+    let paths: Vec<PathBuf> = info.tests.iter().map(|t| dir.join(&t.file)).collect();
+    for p in &paths {
+        if let Some(parent) = p.parent() {
+            std::fs::create_dir_all(parent).map_err(|source| CampaignError::Write {
+                file: display(parent),
+                source,
+            })?;
+        }
+    }
+    records
+        .par_iter()
+        .zip(paths.par_iter())
+        .map(|(r, p)| write_record(r, p))
+        .collect::<Result<Vec<()>, CampaignError>>()?;
+    Ok(())
+}

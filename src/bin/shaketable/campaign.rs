@@ -1,8 +1,225 @@
-//! `shaketable campaign` (not yet implemented).
+//! `shaketable campaign`: synthesise the paper's test program (`synth`) or check a
+//! campaign directory (`check`).
+
+use anyhow::Context;
+use indicatif::{ProgressBar, ProgressStyle};
+use shaketable::campaign::format::read_campaign;
+use shaketable::campaign::synth::{
+    self, NoiseLevels, SynthOptions, DEFAULT_RANDOM_DURATION_S, SYNTHESIS_FILE,
+};
+use shaketable::solver::DEFAULT_MAX_SUBSTEP_S;
+use std::path::{Path, PathBuf};
+use std::time::Instant;
 
 #[derive(clap::Args)]
-pub struct Args {}
+pub struct Args {
+    #[command(subcommand)]
+    command: Command,
+}
 
-pub fn run(_args: Args) -> anyhow::Result<()> {
-    anyhow::bail!("`shaketable campaign` is not implemented yet")
+#[derive(clap::Subcommand)]
+enum Command {
+    /// Write the paper's test program (R1-R3, S1-S9, T1-T6) simulated with seeded sensor
+    /// noise inside the loop, plus truth.toml (the parameters used) and synthesis.toml.
+    Synth(SynthArgs),
+    /// Read a campaign, check every rule of the format, and summarise it.
+    Check(CheckArgs),
+}
+
+#[derive(clap::Args)]
+struct SynthArgs {
+    /// Parameter file (TOML); the TREES Lab defaults when omitted.
+    #[arg(long, value_name = "FILE")]
+    params: Option<PathBuf>,
+    /// Switch on a catalogue effect, e.g. `specimen:mass_kg=20000,frequency_hz=6,damping_ratio=0.02`
+    /// (repeatable).
+    #[arg(long = "effect", value_name = "NAME:KEY=VALUE,...")]
+    effects: Vec<String>,
+    /// Seed of the random references and of the sensor noise (same seed, same bytes).
+    #[arg(long, default_value_t = 1)]
+    seed: u64,
+    /// Length of the band-limited part of the random tests, s.
+    #[arg(long, default_value_t = DEFAULT_RANDOM_DURATION_S, value_name = "S")]
+    random_duration: f64,
+    /// Spool position noise, RMS (normalised; measured only, not fed back).
+    #[arg(long, default_value_t = NoiseLevels::default().spool, value_name = "RMS")]
+    noise_spool: f64,
+    /// Displacement (LVDT) noise, m RMS (inside the loop).
+    #[arg(long, default_value_t = NoiseLevels::default().displacement_m, value_name = "M")]
+    noise_displacement: f64,
+    /// Acceleration noise, m/s^2 RMS (inside the loop).
+    #[arg(long, default_value_t = NoiseLevels::default().acceleration_m_s2, value_name = "M_S2")]
+    noise_acceleration: f64,
+    /// Force (delta-P cell) noise, N RMS (inside the loop).
+    #[arg(long, default_value_t = NoiseLevels::default().force_n, value_name = "N")]
+    noise_force: f64,
+    /// No sensor noise at all (overrides the --noise-* options).
+    #[arg(long)]
+    no_noise: bool,
+    /// Only these tests, e.g. `R1,R2,S3`.
+    #[arg(long, value_delimiter = ',', value_name = "NAMES")]
+    tests: Option<Vec<String>>,
+    /// Largest solver sub-step, s.
+    #[arg(long, default_value_t = DEFAULT_MAX_SUBSTEP_S, value_name = "S")]
+    max_substep: f64,
+    /// Overwrite OUT_DIR even if it holds a campaign that is not synthetic.
+    #[arg(long)]
+    force: bool,
+    /// No progress bar.
+    #[arg(long)]
+    quiet: bool,
+    /// Output directory (created if needed).
+    out_dir: PathBuf,
+}
+
+#[derive(clap::Args)]
+struct CheckArgs {
+    /// Campaign directory (holding campaign.toml).
+    dir: PathBuf,
+}
+
+pub fn run(args: Args) -> anyhow::Result<()> {
+    match args.command {
+        Command::Synth(a) => run_synth(a),
+        Command::Check(a) => run_check(a),
+    }
+}
+
+fn run_synth(a: SynthArgs) -> anyhow::Result<()> {
+    let mut params = crate::load_params(a.params.as_deref())?;
+    for e in &a.effects {
+        params
+            .apply_effect_spec(e)
+            .map_err(|m| anyhow::anyhow!("--effect {e}: {m}"))?;
+    }
+    let opts = SynthOptions {
+        seed: a.seed,
+        noise: if a.no_noise {
+            NoiseLevels::none()
+        } else {
+            NoiseLevels {
+                spool: a.noise_spool,
+                displacement_m: a.noise_displacement,
+                acceleration_m_s2: a.noise_acceleration,
+                force_n: a.noise_force,
+            }
+        },
+        random_duration_s: a.random_duration,
+        max_substep_s: a.max_substep,
+        tests: a
+            .tests
+            .as_ref()
+            .map(|v| v.iter().map(|s| s.trim().to_string()).collect()),
+    };
+    opts.validate()?;
+    guard_out_dir(&a.out_dir, a.force)?;
+    let program = synth::selected_program(&opts);
+    let table_s: f64 = program
+        .iter()
+        .map(|(_, s)| synth::test_duration_s(s, opts.random_duration_s))
+        .sum();
+    let total: u64 = program
+        .iter()
+        .map(|(_, s)| synth::test_samples(s, opts.random_duration_s, synth::SAMPLE_RATE_HZ) as u64)
+        .sum();
+    let bar = if a.quiet {
+        ProgressBar::hidden()
+    } else {
+        let b = ProgressBar::new(total);
+        b.set_style(
+            ProgressStyle::with_template(
+                "{spinner} simulating [{bar:40}] {percent:>3}% of {msg} ({elapsed}, eta {eta})",
+            )
+            .unwrap_or_else(|_| ProgressStyle::default_bar())
+            .progress_chars("=> "),
+        );
+        b.set_message(format!("{table_s} s of table time"));
+        b
+    };
+    let start = Instant::now();
+    let cb = |done: u64, _total: u64| bar.set_position(done.max(bar.position()));
+    let campaign = synth::synthesise_program(&params, &program, &opts, Some(&cb))?;
+    let sim_s = start.elapsed().as_secs_f64();
+    bar.set_message("writing".to_string());
+    synth::write_synthetic(&campaign, &params, &opts, &a.out_dir)?;
+    bar.finish_and_clear();
+    let wall = start.elapsed().as_secs_f64();
+    let bytes: u64 = campaign
+        .info
+        .tests
+        .iter()
+        .filter_map(|t| std::fs::metadata(a.out_dir.join(&t.file)).ok())
+        .map(|m| m.len())
+        .sum();
+    eprintln!(
+        "wrote {} tests ({table_s} s of table time, {total} samples, {:.1} MB) to {} in {wall:.2} s \
+         (simulation {sim_s:.2} s, writing {:.2} s); seed {}",
+        campaign.info.tests.len(),
+        bytes as f64 / 1e6,
+        a.out_dir.display(),
+        wall - sim_s,
+        opts.seed
+    );
+    Ok(())
+}
+
+/// Refuse to overwrite a campaign that was not synthesised (a measured one) unless
+/// `--force`.
+fn guard_out_dir(dir: &Path, force: bool) -> anyhow::Result<()> {
+    if force || !dir.join("campaign.toml").exists() || dir.join(SYNTHESIS_FILE).exists() {
+        return Ok(());
+    }
+    anyhow::bail!(
+        "{} holds a campaign.toml that was not synthesised (no {SYNTHESIS_FILE}); \
+         refusing to overwrite it (use --force)",
+        dir.display()
+    )
+}
+
+fn rms(x: &[f64]) -> f64 {
+    (x.iter().map(|v| v * v).sum::<f64>() / x.len().max(1) as f64).sqrt()
+}
+
+fn run_check(a: CheckArgs) -> anyhow::Result<()> {
+    let c = read_campaign(&a.dir).with_context(|| format!("campaign {}", a.dir.display()))?;
+    println!(
+        "{}: \"{}\", {} Hz",
+        a.dir.display(),
+        c.info.name,
+        c.info.sample_rate_hz
+    );
+    println!(
+        "{:<6} {:<9} {:<13} {:>9} {:>12} {:>12} {:>12} {:>6}  extra",
+        "test", "kind", "control", "length_s", "rms_ref_m", "rms_disp_m", "rms_acc_m_s2", "spool"
+    );
+    let mut total = 0.0;
+    for (t, r) in c.info.tests.iter().zip(&c.records) {
+        let len = r.len() as f64 / c.info.sample_rate_hz;
+        total += len;
+        println!(
+            "{:<6} {:<9} {:<13} {:>9.2} {:>12.4e} {:>12.4e} {:>12.4e} {:>6}  {}",
+            t.name,
+            format!("{:?}", t.kind).to_lowercase(),
+            format!("{:?}", t.control).to_lowercase(),
+            len,
+            rms(&r.ref_displacement_m),
+            rms(&r.displacement_m),
+            rms(&r.acceleration_m_s2),
+            if r.spool_position.is_some() {
+                "yes"
+            } else {
+                "no"
+            },
+            r.extra
+                .iter()
+                .map(|(n, _)| n.as_str())
+                .collect::<Vec<_>>()
+                .join(",")
+        );
+    }
+    println!(
+        "{} tests, {total} s of table time: every rule of the format holds",
+        c.records.len()
+    );
+    Ok(())
 }

@@ -1,8 +1,166 @@
-//! `shaketable simulate` (not yet implemented).
+//! `shaketable simulate`: drive the model with the reference channels of a campaign-format
+//! CSV (noise-free) and write every output channel as a campaign-format CSV.
+//!
+//! Controller gains: the parameter file's `[controller]`, with the per-test override of
+//! the campaign the CSV belongs to applied (e.g. R1's `controller = { fv = 0.0 }`), as
+//! the test was run with it. The campaign is `--campaign-dir`, or else the campaign.toml
+//! next to the CSV when it lists that file; `--no-campaign` ignores both. The sample
+//! rate is `--sample-rate`, else the campaign's, else inferred from the time column.
+
+use anyhow::Context;
+use shaketable::campaign::format::{read_campaign_info, read_reference, write_record};
+use shaketable::campaign::{CampaignInfo, Record, TestSpec};
+use shaketable::solver::DEFAULT_MAX_SUBSTEP_S;
+use shaketable::{simulate_record, Model};
+use std::path::{Path, PathBuf};
 
 #[derive(clap::Args)]
-pub struct Args {}
+pub struct Args {
+    /// Parameter file (TOML); the TREES Lab defaults when omitted.
+    #[arg(long, value_name = "FILE")]
+    params: Option<PathBuf>,
+    /// Switch on a catalogue effect, e.g. `foundation:mass_kg=2e5,frequency_hz=8` (repeatable).
+    #[arg(long = "effect", value_name = "NAME:KEY=VALUE,...")]
+    effects: Vec<String>,
+    /// Campaign-format CSV with time_s and the ref_* channels (others are ignored).
+    #[arg(long, value_name = "CSV")]
+    reference: PathBuf,
+    /// Output CSV (campaign format, every output channel).
+    #[arg(long, value_name = "CSV")]
+    out: PathBuf,
+    /// Sample rate of the reference, Hz (checked against its time column).
+    #[arg(long, value_name = "HZ")]
+    sample_rate: Option<f64>,
+    /// Campaign directory whose campaign.toml lists the reference (per-test controller
+    /// overrides are applied). Default: the CSV's own directory, if it has a campaign.toml.
+    #[arg(long, value_name = "DIR", conflicts_with = "no_campaign")]
+    campaign_dir: Option<PathBuf>,
+    /// Ignore any campaign.toml next to the reference.
+    #[arg(long)]
+    no_campaign: bool,
+    /// Largest solver sub-step, s.
+    #[arg(long, default_value_t = DEFAULT_MAX_SUBSTEP_S, value_name = "S")]
+    max_substep: f64,
+}
 
-pub fn run(_args: Args) -> anyhow::Result<()> {
-    anyhow::bail!("`shaketable simulate` is not implemented yet")
+/// The campaign test that records `reference`, if any.
+fn find_test<'a>(info: &'a CampaignInfo, dir: &Path, reference: &Path) -> Option<&'a TestSpec> {
+    let target = reference.canonicalize().ok()?;
+    info.tests
+        .iter()
+        .find(|t| dir.join(&t.file).canonicalize().ok().as_ref() == Some(&target))
+}
+
+pub fn run(a: Args) -> anyhow::Result<()> {
+    let mut params = crate::load_params(a.params.as_deref())?;
+    for e in &a.effects {
+        params
+            .apply_effect_spec(e)
+            .map_err(|m| anyhow::anyhow!("--effect {e}: {m}"))?;
+    }
+    if let Some(fs) = a.sample_rate {
+        anyhow::ensure!(
+            fs.is_finite() && fs > 0.0,
+            "--sample-rate {fs}: must be > 0"
+        );
+    }
+    anyhow::ensure!(
+        a.max_substep.is_finite() && a.max_substep > 0.0,
+        "--max-substep {}: must be > 0",
+        a.max_substep
+    );
+    // the campaign the reference belongs to
+    let campaign: Option<(PathBuf, CampaignInfo)> = if a.no_campaign {
+        None
+    } else if let Some(dir) = &a.campaign_dir {
+        let info = read_campaign_info(dir)?;
+        Some((dir.clone(), info))
+    } else {
+        let dir = a
+            .reference
+            .parent()
+            .map(|p| {
+                if p.as_os_str().is_empty() {
+                    Path::new(".")
+                } else {
+                    p
+                }
+            })
+            .unwrap_or(Path::new("."))
+            .to_path_buf();
+        if dir.join("campaign.toml").exists() {
+            match read_campaign_info(&dir) {
+                Ok(info) => Some((dir, info)),
+                Err(e) => {
+                    eprintln!("note: ignoring the campaign next to the reference: {e}");
+                    None
+                }
+            }
+        } else {
+            None
+        }
+    };
+    let mut fs = a.sample_rate;
+    if let Some((dir, info)) = &campaign {
+        match find_test(info, dir, &a.reference) {
+            Some(t) => {
+                let gains = t.controller.apply(&params.controller);
+                if t.controller != Default::default() {
+                    eprintln!(
+                        "note: test `{}` of {}: controller override applied: {:?}",
+                        t.name,
+                        dir.join("campaign.toml").display(),
+                        gains
+                    );
+                }
+                if info.controller != params.controller {
+                    eprintln!(
+                        "note: the parameter file's [controller] differs from the campaign's; \
+                         simulating with the parameter file's gains (plus the test override)"
+                    );
+                }
+                params.controller = gains;
+                fs = fs.or(Some(info.sample_rate_hz));
+            }
+            None if a.campaign_dir.is_some() => anyhow::bail!(
+                "{}: no test of {} lists this file",
+                a.reference.display(),
+                dir.join("campaign.toml").display()
+            ),
+            None => {}
+        }
+    }
+    let reference = read_reference(&a.reference, fs)?;
+    let fs = reference.sample_rate_hz;
+    let model = Model::new(&params);
+    let out = simulate_record(&model, &reference.inputs(), fs, None, a.max_substep);
+    let col = |f: fn(&shaketable::Outputs) -> f64| out.iter().map(f).collect::<Vec<f64>>();
+    let record = Record {
+        time_s: reference.time_s.clone(),
+        ref_displacement_m: reference.ref_displacement_m.clone(),
+        ref_velocity_m_s: reference.ref_velocity_m_s.clone(),
+        ref_acceleration_m_s2: reference.ref_acceleration_m_s2.clone(),
+        valve_command: col(|o| o.valve_command),
+        spool_position: Some(col(|o| o.spool_position)),
+        displacement_m: col(|o| o.displacement_m),
+        acceleration_m_s2: col(|o| o.acceleration_m_s2),
+        force_n: col(|o| o.actuator_force_n),
+        extra: vec![
+            ("velocity_m_s".to_string(), col(|o| o.velocity_m_s)),
+            ("pressure_a_pa".to_string(), col(|o| o.pressure_a_pa)),
+            ("pressure_b_pa".to_string(), col(|o| o.pressure_b_pa)),
+        ],
+    };
+    if let Some(parent) = a.out.parent().filter(|p| !p.as_os_str().is_empty()) {
+        std::fs::create_dir_all(parent)
+            .with_context(|| format!("cannot create {}", parent.display()))?;
+    }
+    write_record(&record, &a.out)?;
+    eprintln!(
+        "simulated {} samples ({} s at {fs} Hz), wrote {}",
+        record.len(),
+        record.len() as f64 / fs,
+        a.out.display()
+    );
+    Ok(())
 }
