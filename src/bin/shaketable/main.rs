@@ -41,6 +41,13 @@ enum Command {
 }
 
 fn main() {
+    // Die quietly on a closed pipe (`shaketable ... | head`) like other Unix tools,
+    // instead of panicking in println!.
+    #[cfg(unix)]
+    // SAFETY: restoring the default disposition of SIGPIPE before any thread starts.
+    unsafe {
+        libc::signal(libc::SIGPIPE, libc::SIG_DFL);
+    }
     let cli = Cli::parse();
     let result = match cli.command {
         Command::Params(a) => params::run(a),
