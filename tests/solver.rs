@@ -2,28 +2,10 @@
 
 use shaketable::params::{ActuatorModel, ServovalveModel};
 use shaketable::solver::DEFAULT_MAX_SUBSTEP_S;
-use shaketable::{simulate_record, Inputs, Model, Params, Reference};
-use std::f64::consts::PI;
+use shaketable::{simulate_record, Model, Params};
 
-const FS: f64 = 512.0;
-
-/// A sine reference with consistent derivatives.
-fn sine(amplitude_m: f64, frequency_hz: f64, seconds: f64) -> Vec<Inputs> {
-    let w = 2.0 * PI * frequency_hz;
-    (0..(seconds * FS) as usize)
-        .map(|k| {
-            let t = k as f64 / FS;
-            Inputs {
-                reference: Reference {
-                    displacement_m: amplitude_m * (w * t).sin(),
-                    velocity_m_s: amplitude_m * w * (w * t).cos(),
-                    acceleration_m_s2: -amplitude_m * w * w * (w * t).sin(),
-                },
-                external_force_n: 0.0,
-            }
-        })
-        .collect()
-}
+mod common;
+use common::{sine, FS};
 
 #[test]
 fn runs_are_bit_identical() {
@@ -111,16 +93,7 @@ fn halving_the_substep_changes_outputs_by_less_than_1e_6_of_rms() {
             .find(|t| t.name == test)
             .unwrap();
         let r = synth::reference(&spec, 2, 11, 90.0, FS).unwrap();
-        let inputs: Vec<Inputs> = (0..r.len())
-            .map(|k| Inputs {
-                reference: Reference {
-                    displacement_m: r.displacement_m[k],
-                    velocity_m_s: r.velocity_m_s[k],
-                    acceleration_m_s2: r.acceleration_m_s2[k],
-                },
-                external_force_n: 0.0,
-            })
-            .collect();
+        let inputs = common::inputs_of(&r);
         for (name, params) in shaketable::benchmark::models() {
             let m = Model::new(&params);
             let a = simulate_record(&m, &inputs, FS, None, DEFAULT_MAX_SUBSTEP_S);
