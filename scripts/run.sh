@@ -15,3 +15,13 @@ echo
 echo "== 1. TREES Lab table: analytic closed-loop frequency response (spec section 6)"
 "$BIN" params --defaults > report/trees_lab.toml
 "$BIN" frf --params report/trees_lab.toml --out report/frf
+
+if [ -x scripts/build_fmu.sh ]; then
+  echo
+  echo "== 2. The table as an FMI 2.0 Co-Simulation FMU, measured through fmpy"
+  scripts/build_fmu.sh
+  "$ROOT/.venv/bin/python" scripts/fmu_frf.py target/fmu/ShakeTable.fmu --out report/fmu
+fi
+
+echo
+echo "== done: report/ holds trees_lab.toml and frf/ (frf.csv, bode.png, figures.json)"

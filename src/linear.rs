@@ -683,3 +683,31 @@ mod tests {
         assert!((p[199] + 19.9).abs() < 1e-9);
     }
 }
+
+/// Oil-column figures of spec section 4: `k_oil = 4 beta A^2 / V_t`,
+/// `f_oil = sqrt(k_oil / M) / 2 pi`, `zeta_oil = (C_l / A) sqrt(beta M / V_t)`.
+#[derive(Debug, Clone, Copy, PartialEq, serde::Serialize)]
+pub struct OilColumn {
+    pub stiffness_n_m: f64,
+    pub frequency_hz: f64,
+    pub damping_ratio: f64,
+}
+
+impl OilColumn {
+    pub fn of(p: &Params) -> OilColumn {
+        let a = &p.actuator;
+        let k = 4.0 * a.bulk_modulus_pa * a.piston_area_m2.powi(2) / a.total_oil_volume_m3;
+        OilColumn {
+            stiffness_n_m: k,
+            frequency_hz: (k / p.table.mass_kg).sqrt() / (2.0 * PI),
+            damping_ratio: a.leakage_m3_s_pa / a.piston_area_m2
+                * (a.bulk_modulus_pa * p.table.mass_kg / a.total_oil_volume_m3).sqrt(),
+        }
+    }
+
+    /// The bulk modulus that gives `frequency_hz` for mass `mass_kg` and the geometry
+    /// (`A`, `V_t`): `beta = (2 pi f)^2 M V_t / (4 A^2)` (paper 4.1.3).
+    pub fn bulk_modulus_pa(frequency_hz: f64, mass_kg: f64, area_m2: f64, volume_m3: f64) -> f64 {
+        (2.0 * PI * frequency_hz).powi(2) * mass_kg * volume_m3 / (4.0 * area_m2 * area_m2)
+    }
+}

@@ -1,1 +1,4 @@
-//! Figures (plotters) and Markdown/HTML report pages.
+//! Figures (plotters) and report pages. Everything here reads results; nothing computes
+//! physics.
+
+pub mod plot;

@@ -28,6 +28,6 @@ pub fn run(args: Args) -> anyhow::Result<()> {
             row.realtime_factor()
         );
     }
-    println!("(simulation rows: one core; sub-step 1/4096 s unless marked)");
+    println!("(simulation rows: one core; sub-step 1/3072 s unless marked)");
     Ok(())
 }

@@ -1,8 +1,195 @@
-//! `shaketable frf` (not yet implemented).
+//! `shaketable frf`: the analytic closed-loop frequency response of a parameter file
+//! (spec section 6): printed peak and phase figures, closed-loop poles, a CSV of the
+//! four transfer functions, a Bode PNG of the table TF and a JSON of the figures.
+
+use anyhow::Context;
+use shaketable::linear::{log_grid, Linearisation, OilColumn, TfFigures};
+use shaketable::report::plot::{bode_png, BodeCurve};
+use std::io::Write;
+use std::path::PathBuf;
 
 #[derive(clap::Args)]
-pub struct Args {}
+pub struct Args {
+    /// Parameter file (TOML); the TREES Lab defaults when omitted.
+    #[arg(long)]
+    params: Option<PathBuf>,
+    /// Directory for frf.csv, bode.png and figures.json (created); print only when omitted.
+    #[arg(long)]
+    out: Option<PathBuf>,
+    /// Lowest frequency of the CSV and plot, Hz.
+    #[arg(long, default_value_t = 0.1)]
+    f_min: f64,
+    /// Highest frequency of the CSV and plot, Hz.
+    #[arg(long, default_value_t = 100.0)]
+    f_max: f64,
+    /// Number of log-spaced frequencies in the CSV.
+    #[arg(long, default_value_t = 1000)]
+    points: usize,
+}
 
-pub fn run(_args: Args) -> anyhow::Result<()> {
-    anyhow::bail!("`shaketable frf` is not implemented yet")
+#[derive(serde::Serialize)]
+struct Pole {
+    frequency_hz: f64,
+    damping_ratio: f64,
+    re: f64,
+    im: f64,
+}
+
+#[derive(serde::Serialize)]
+struct Figures {
+    table_tf: TfFigures,
+    oil_column: OilColumn,
+    poles: Vec<Pole>,
+    notes: Vec<String>,
+}
+
+pub fn run(args: Args) -> anyhow::Result<()> {
+    if !(args.f_min > 0.0 && args.f_max > args.f_min && args.f_max.is_finite()) {
+        anyhow::bail!(
+            "--f-min and --f-max must satisfy 0 < f-min < f-max (got {} and {})",
+            args.f_min,
+            args.f_max
+        );
+    }
+    if args.points < 10 {
+        anyhow::bail!("--points must be at least 10 (got {})", args.points);
+    }
+    let p = crate::load_params(args.params.as_deref())?;
+    let lin = Linearisation::new(&p);
+    let fig = lin
+        .table_tf_figures()
+        .context("the table TF has no peak between 0.5 and 50 Hz with +-1 Hz around it")?;
+    let oil = OilColumn::of(&p);
+    let poles: Vec<Pole> = lin
+        .poles()
+        .into_iter()
+        .filter(|q| q.im >= 0.0)
+        .map(|q| Pole {
+            frequency_hz: q.norm() / (2.0 * std::f64::consts::PI),
+            damping_ratio: if q.norm() > 0.0 {
+                -q.re / q.norm()
+            } else {
+                1.0
+            },
+            re: q.re,
+            im: q.im,
+        })
+        .collect();
+    let source = args
+        .params
+        .as_ref()
+        .map(|p| p.display().to_string())
+        .unwrap_or_else(|| "built-in TREES Lab defaults".into());
+    println!("shaketable frf: {source}");
+    println!(
+        "  servovalve {}, actuator {}",
+        p.servovalve.model.name(),
+        p.actuator.model.name()
+    );
+    println!("table TF (reference acceleration -> table acceleration), linearised at rest:");
+    println!("  peak frequency        {:8.3} Hz", fig.peak_hz);
+    println!(
+        "  peak gain             {:8.3}  ({:.2} x the low-frequency gain)",
+        fig.peak_gain, fig.peak_ratio
+    );
+    println!(
+        "  low-frequency gain    {:8.4}  (at {} Hz)",
+        fig.low_frequency_gain,
+        shaketable::linear::LOW_FREQUENCY_HZ
+    );
+    println!("  phase drop, peak +-1 Hz {:6.1} deg", fig.phase_drop_deg);
+    println!("  steepest phase        {:8.3} Hz", fig.steepest_hz);
+    println!(
+        "oil column: f_oil = {:.3} Hz, zeta_oil = {:.4}, k_oil = {:.4e} N/m",
+        oil.frequency_hz, oil.damping_ratio, oil.stiffness_n_m
+    );
+    println!("closed-loop poles (frequency, damping ratio):");
+    for q in &poles {
+        if q.frequency_hz < 1e-6 {
+            println!(
+                "  {:10.3} Hz  (zero pole: the linearised Bouc-Wen state duplicates the stroke)",
+                0.0
+            );
+        } else {
+            println!("  {:10.3} Hz  {:.4}", q.frequency_hz, q.damping_ratio);
+        }
+    }
+    for n in &lin.notes {
+        println!("note: {n}");
+    }
+    let Some(out) = args.out else { return Ok(()) };
+    std::fs::create_dir_all(&out).with_context(|| format!("cannot create {}", out.display()))?;
+    let grid = log_grid(args.f_min, args.f_max, args.points);
+    let table = lin.sample(&grid, Linearisation::table_tf);
+    let spool = lin.sample(&grid, Linearisation::command_to_spool);
+    let force = lin.sample(&grid, Linearisation::spool_to_force);
+    let mass = lin.sample(&grid, Linearisation::acceleration_to_force);
+    let csv_path = out.join("frf.csv");
+    let mut w = csv::Writer::from_path(&csv_path)
+        .with_context(|| format!("cannot write {}", csv_path.display()))?;
+    w.write_record([
+        "frequency_hz",
+        "table_gain",
+        "table_phase_deg",
+        "command_to_spool_gain",
+        "command_to_spool_phase_deg",
+        "spool_to_force_n",
+        "spool_to_force_phase_deg",
+        "acceleration_to_force_kg",
+        "acceleration_to_force_phase_deg",
+    ])?;
+    let phases: Vec<Vec<f64>> = [&table, &spool, &force, &mass]
+        .iter()
+        .map(|f| {
+            shaketable::linear::unwrapped_phase(&f.response)
+                .iter()
+                .map(|p| p.to_degrees())
+                .collect()
+        })
+        .collect();
+    for k in 0..grid.len() {
+        let mut row = vec![grid[k]];
+        for (i, f) in [&table, &spool, &force, &mass].iter().enumerate() {
+            row.push(f.response[k].norm());
+            row.push(phases[i][k]);
+        }
+        w.write_record(
+            row.iter()
+                .map(|v| ryu::Buffer::new().format(*v).to_string()),
+        )?;
+    }
+    w.flush()?;
+    let png = out.join("bode.png");
+    bode_png(
+        &png,
+        &format!(
+            "Table TF, reference -> table acceleration (peak {:.2} Hz)",
+            fig.peak_hz
+        ),
+        "gain (-)",
+        &[BodeCurve {
+            label: "analytic, linearised at rest",
+            frequency_hz: &table.frequency_hz,
+            response: &table.response,
+        }],
+        args.f_min,
+        args.f_max,
+    )?;
+    let json_path = out.join("figures.json");
+    let mut f = std::fs::File::create(&json_path)
+        .with_context(|| format!("cannot write {}", json_path.display()))?;
+    let figures = Figures {
+        table_tf: fig,
+        oil_column: oil,
+        poles,
+        notes: lin.notes.clone(),
+    };
+    writeln!(f, "{}", serde_json::to_string_pretty(&figures)?)?;
+    println!(
+        "wrote {}, {}, {}",
+        csv_path.display(),
+        png.display(),
+        json_path.display()
+    );
+    Ok(())
 }

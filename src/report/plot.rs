@@ -1,0 +1,188 @@
+//! PNG figures with plotters: Bode diagrams (magnitude and unwrapped phase over a log
+//! frequency axis) and x-y line/point plots for the identification and diagnosis reports.
+
+use crate::linear::unwrapped_phase;
+use num_complex::Complex64;
+use plotters::prelude::*;
+use std::path::Path;
+
+/// A failed figure, with the file it was meant for.
+#[derive(Debug, thiserror::Error)]
+#[error("cannot draw {path}: {message}")]
+pub struct PlotError {
+    pub path: String,
+    pub message: String,
+}
+
+/// One frequency response to draw.
+pub struct BodeCurve<'a> {
+    pub label: &'a str,
+    pub frequency_hz: &'a [f64],
+    pub response: &'a [Complex64],
+}
+
+/// One x-y series: a line, or points when `points` is set.
+pub struct Series<'a> {
+    pub label: &'a str,
+    pub x: &'a [f64],
+    pub y: &'a [f64],
+    pub points: bool,
+}
+
+const SIZE: (u32, u32) = (1000, 760);
+
+fn color(i: usize) -> RGBColor {
+    const C: [RGBColor; 6] = [
+        RGBColor(31, 119, 180),
+        RGBColor(214, 39, 40),
+        RGBColor(44, 160, 44),
+        RGBColor(255, 127, 14),
+        RGBColor(148, 103, 189),
+        RGBColor(90, 90, 90),
+    ];
+    C[i % C.len()]
+}
+
+fn range(values: impl Iterator<Item = f64>, pad: f64) -> (f64, f64) {
+    let (lo, hi) = values
+        .filter(|v| v.is_finite())
+        .fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), v| {
+            (a.min(v), b.max(v))
+        });
+    if !lo.is_finite() {
+        return (0.0, 1.0);
+    }
+    let span = (hi - lo).max(1e-12 * hi.abs().max(1.0));
+    (lo - pad * span, hi + pad * span)
+}
+
+/// Bode diagram of `curves` between `f_lo` and `f_hi` Hz: magnitude (linear) above,
+/// phase in degrees below. `magnitude_label` names the gain's unit.
+pub fn bode_png(
+    path: &Path,
+    title: &str,
+    magnitude_label: &str,
+    curves: &[BodeCurve],
+    f_lo: f64,
+    f_hi: f64,
+) -> Result<(), PlotError> {
+    let err = |e: String| PlotError {
+        path: path.display().to_string(),
+        message: e,
+    };
+    let in_band = |c: &BodeCurve| -> Vec<(f64, f64, f64)> {
+        let ph = unwrapped_phase(c.response);
+        c.frequency_hz
+            .iter()
+            .zip(c.response)
+            .zip(ph)
+            .filter(|((f, h), _)| **f >= f_lo && **f <= f_hi && h.norm().is_finite())
+            .map(|((f, h), p)| (*f, h.norm(), p.to_degrees()))
+            .collect()
+    };
+    let data: Vec<Vec<(f64, f64, f64)>> = curves.iter().map(in_band).collect();
+    let (_, mag_hi) = range(data.iter().flatten().map(|d| d.1), 0.05);
+    let (ph_lo, ph_hi) = range(data.iter().flatten().map(|d| d.2), 0.05);
+    let root = BitMapBackend::new(path, SIZE).into_drawing_area();
+    root.fill(&WHITE).map_err(|e| err(e.to_string()))?;
+    let (top, bottom) = root.split_vertically(SIZE.1 / 2);
+    let mut mag = ChartBuilder::on(&top)
+        .caption(title, ("sans-serif", 22))
+        .margin(10)
+        .x_label_area_size(30)
+        .y_label_area_size(70)
+        .build_cartesian_2d((f_lo..f_hi).log_scale(), 0.0..mag_hi)
+        .map_err(|e| err(e.to_string()))?;
+    mag.configure_mesh()
+        .y_desc(magnitude_label)
+        .draw()
+        .map_err(|e| err(e.to_string()))?;
+    for (i, (c, d)) in curves.iter().zip(&data).enumerate() {
+        let col = color(i);
+        mag.draw_series(LineSeries::new(
+            d.iter().map(|p| (p.0, p.1)),
+            col.stroke_width(2),
+        ))
+        .map_err(|e| err(e.to_string()))?
+        .label(c.label)
+        .legend(move |(x, y)| PathElement::new(vec![(x, y), (x + 20, y)], col.stroke_width(2)));
+    }
+    mag.configure_series_labels()
+        .background_style(WHITE.mix(0.8))
+        .border_style(BLACK)
+        .draw()
+        .map_err(|e| err(e.to_string()))?;
+    let mut ph = ChartBuilder::on(&bottom)
+        .margin(10)
+        .x_label_area_size(40)
+        .y_label_area_size(70)
+        .build_cartesian_2d((f_lo..f_hi).log_scale(), ph_lo..ph_hi)
+        .map_err(|e| err(e.to_string()))?;
+    ph.configure_mesh()
+        .x_desc("frequency (Hz)")
+        .y_desc("phase (deg)")
+        .draw()
+        .map_err(|e| err(e.to_string()))?;
+    for (i, d) in data.iter().enumerate() {
+        ph.draw_series(LineSeries::new(
+            d.iter().map(|p| (p.0, p.2)),
+            color(i).stroke_width(2),
+        ))
+        .map_err(|e| err(e.to_string()))?;
+    }
+    root.present().map_err(|e| err(e.to_string()))
+}
+
+/// An x-y plot of `series` with axis labels.
+pub fn xy_png(
+    path: &Path,
+    title: &str,
+    x_label: &str,
+    y_label: &str,
+    series: &[Series],
+) -> Result<(), PlotError> {
+    let err = |e: String| PlotError {
+        path: path.display().to_string(),
+        message: e,
+    };
+    let (x_lo, x_hi) = range(series.iter().flat_map(|s| s.x.iter().copied()), 0.02);
+    let (y_lo, y_hi) = range(series.iter().flat_map(|s| s.y.iter().copied()), 0.05);
+    let root = BitMapBackend::new(path, (1000, 600)).into_drawing_area();
+    root.fill(&WHITE).map_err(|e| err(e.to_string()))?;
+    let mut chart = ChartBuilder::on(&root)
+        .caption(title, ("sans-serif", 22))
+        .margin(10)
+        .x_label_area_size(40)
+        .y_label_area_size(80)
+        .build_cartesian_2d(x_lo..x_hi, y_lo..y_hi)
+        .map_err(|e| err(e.to_string()))?;
+    chart
+        .configure_mesh()
+        .x_desc(x_label)
+        .y_desc(y_label)
+        .draw()
+        .map_err(|e| err(e.to_string()))?;
+    for (i, s) in series.iter().enumerate() {
+        let col = color(i);
+        let pts =
+            s.x.iter()
+                .zip(s.y)
+                .filter(|(a, b)| a.is_finite() && b.is_finite())
+                .map(|(a, b)| (*a, *b));
+        let anno = if s.points {
+            chart.draw_series(pts.map(move |p| Circle::new(p, 2, col.filled())))
+        } else {
+            chart.draw_series(LineSeries::new(pts, col.stroke_width(2)))
+        }
+        .map_err(|e| err(e.to_string()))?;
+        anno.label(s.label)
+            .legend(move |(x, y)| PathElement::new(vec![(x, y), (x + 20, y)], col.stroke_width(2)));
+    }
+    chart
+        .configure_series_labels()
+        .background_style(WHITE.mix(0.8))
+        .border_style(BLACK)
+        .draw()
+        .map_err(|e| err(e.to_string()))?;
+    root.present().map_err(|e| err(e.to_string()))
+}
