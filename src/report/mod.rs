@@ -1,4 +1,5 @@
 //! Figures (plotters) and report pages. Everything here reads results; nothing computes
 //! physics.
 
+pub mod identify;
 pub mod plot;

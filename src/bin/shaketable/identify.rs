@@ -1,8 +1,68 @@
-//! `shaketable identify` (not yet implemented).
+//! `shaketable identify DIR`: the paper's section-4 identification of a campaign; JSON of
+//! the estimates, an identified parameter file, a report with the figures, and a printed
+//! table (against the truth when the campaign is synthetic and holds truth.toml).
+
+use anyhow::Context;
+use shaketable::campaign::format::read_campaign;
+use shaketable::identify::identify;
+use std::path::PathBuf;
 
 #[derive(clap::Args)]
-pub struct Args {}
+pub struct Args {
+    /// Campaign directory (campaign.toml and one CSV per test).
+    campaign: PathBuf,
+    /// Write the estimates as JSON here.
+    #[arg(long)]
+    json: Option<PathBuf>,
+    /// Write the identified parameter file (TOML) here.
+    #[arg(long)]
+    params_out: Option<PathBuf>,
+    /// Write the report (index.html, README.md, figures) into this directory.
+    #[arg(long)]
+    report: Option<PathBuf>,
+    /// Parameter file with the true values to compare against (default: the campaign's
+    /// truth.toml when it exists, as written by `campaign synth`).
+    #[arg(long)]
+    truth: Option<PathBuf>,
+}
 
-pub fn run(_args: Args) -> anyhow::Result<()> {
-    anyhow::bail!("`shaketable identify` is not implemented yet")
+pub fn run(args: Args) -> anyhow::Result<()> {
+    let t0 = std::time::Instant::now();
+    let campaign = read_campaign(&args.campaign)?;
+    let id = identify(&campaign);
+    let truth_path = args.truth.clone().or_else(|| {
+        Some(args.campaign.join(shaketable::campaign::synth::TRUTH_FILE)).filter(|p| p.exists())
+    });
+    let truth = match &truth_path {
+        Some(p) => Some(shaketable::Params::from_file(p)?),
+        None => None,
+    };
+    let rows = shaketable::report::identify::summary_rows(&id, truth.as_ref());
+    println!(
+        "identification of {} ({:.2} s)",
+        args.campaign.display(),
+        t0.elapsed().as_secs_f64()
+    );
+    print!(
+        "{}",
+        shaketable::report::identify::text_table(&rows, truth.is_some())
+    );
+    for m in &id.missing {
+        println!("not identified: {m}");
+    }
+    if let Some(p) = &args.json {
+        std::fs::write(p, serde_json::to_string_pretty(&id.to_json())? + "\n")
+            .with_context(|| format!("cannot write {}", p.display()))?;
+        println!("wrote {}", p.display());
+    }
+    if let Some(p) = &args.params_out {
+        std::fs::write(p, id.params.to_toml_string())
+            .with_context(|| format!("cannot write {}", p.display()))?;
+        println!("wrote {}", p.display());
+    }
+    if let Some(dir) = &args.report {
+        shaketable::report::identify::write(dir, &id, &rows, truth.is_some())?;
+        println!("wrote {}", dir.join("index.html").display());
+    }
+    Ok(())
 }

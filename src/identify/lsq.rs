@@ -1,0 +1,222 @@
+//! Nonlinear least squares (Levenberg-Marquardt) for the identification and diagnosis fits.
+//!
+//! Written here rather than taken from the `levenberg-marquardt` crate because the fits
+//! need what it leaves to the caller: finite-difference Jacobians of residuals that are
+//! whole simulations (evaluated in parallel with rayon), box bounds on physical
+//! parameters, and the parameter covariance for the reported uncertainty.
+
+use nalgebra::{DMatrix, DVector};
+use rayon::prelude::*;
+
+/// Options of [`minimise`].
+#[derive(Debug, Clone, Copy)]
+pub struct LsqOptions {
+    pub max_iterations: usize,
+    /// Stop when the relative cost decrease of an accepted step is below this.
+    pub tolerance: f64,
+    /// Relative finite-difference step (of `max(|theta|, scale)`).
+    pub step: f64,
+    /// Evaluate Jacobian columns in parallel.
+    pub parallel: bool,
+}
+
+impl Default for LsqOptions {
+    fn default() -> Self {
+        LsqOptions {
+            max_iterations: 60,
+            tolerance: 1e-10,
+            step: 1e-6,
+            parallel: false,
+        }
+    }
+}
+
+/// Result of a fit.
+#[derive(Debug, Clone)]
+pub struct LsqFit {
+    pub theta: Vec<f64>,
+    /// Sum of squared residuals at `theta`.
+    pub cost: f64,
+    pub residuals: usize,
+    /// One-sigma uncertainty of each parameter from `s^2 (J^T J)^-1`, NaN when singular.
+    pub sigma: Vec<f64>,
+    pub iterations: usize,
+}
+
+/// Minimise `sum r(theta)^2` from `theta0` within `[lower, upper]` (per parameter).
+/// `scale` gives each parameter's typical magnitude (for steps and damping).
+/// Residuals that are not finite make a trial step fail (it is rejected).
+pub fn minimise<F>(
+    residuals: F,
+    theta0: &[f64],
+    lower: &[f64],
+    upper: &[f64],
+    scale: &[f64],
+    opts: LsqOptions,
+) -> Option<LsqFit>
+where
+    F: Fn(&[f64]) -> Option<Vec<f64>> + Sync,
+{
+    let n = theta0.len();
+    let clamp = |t: &mut Vec<f64>| {
+        for i in 0..n {
+            t[i] = t[i].clamp(lower[i], upper[i]);
+        }
+    };
+    let finite = |r: &Vec<f64>| r.iter().all(|x| x.is_finite());
+    let cost = |r: &[f64]| r.iter().map(|x| x * x).sum::<f64>();
+    let mut theta = theta0.to_vec();
+    clamp(&mut theta);
+    let mut r = residuals(&theta).filter(finite)?;
+    let m = r.len();
+    let mut c = cost(&r);
+    let mut lambda = 1e-3;
+    let mut iterations = 0;
+    let jacobian = |theta: &[f64], r: &[f64]| -> Option<DMatrix<f64>> {
+        let column = |j: usize| -> Option<Vec<f64>> {
+            let h = opts.step * theta[j].abs().max(scale[j]);
+            let mut t = theta.to_vec();
+            // step inside the bounds
+            let h = if t[j] + h > upper[j] { -h } else { h };
+            t[j] += h;
+            let rp = residuals(&t).filter(finite)?;
+            Some(rp.iter().zip(r).map(|(a, b)| (a - b) / h).collect())
+        };
+        let cols: Vec<Option<Vec<f64>>> = if opts.parallel {
+            (0..n).into_par_iter().map(column).collect()
+        } else {
+            (0..n).map(column).collect()
+        };
+        let mut jm = DMatrix::zeros(m, n);
+        for (j, col) in cols.into_iter().enumerate() {
+            let col = col?;
+            for i in 0..m {
+                jm[(i, j)] = col[i];
+            }
+        }
+        Some(jm)
+    };
+    let mut jm = jacobian(&theta, &r)?;
+    while iterations < opts.max_iterations {
+        iterations += 1;
+        let jt = jm.transpose();
+        let jtj = &jt * &jm;
+        let g = &jt * DVector::from_row_slice(&r);
+        let mut improved = false;
+        for _ in 0..12 {
+            let mut a = jtj.clone();
+            for i in 0..n {
+                a[(i, i)] += lambda * jtj[(i, i)].max(1e-30 / (scale[i] * scale[i]));
+            }
+            let Some(delta) = a.lu().solve(&(-&g)) else {
+                lambda *= 10.0;
+                continue;
+            };
+            let mut trial: Vec<f64> = (0..n).map(|i| theta[i] + delta[i]).collect();
+            clamp(&mut trial);
+            match residuals(&trial).filter(finite) {
+                Some(rt) if cost(&rt) < c => {
+                    let ct = cost(&rt);
+                    let rel = (c - ct) / c.max(1e-300);
+                    theta = trial;
+                    r = rt;
+                    c = ct;
+                    lambda = (lambda * 0.3).max(1e-12);
+                    improved = true;
+                    if rel < opts.tolerance {
+                        return Some(finish(theta, c, m, &jm, iterations));
+                    }
+                    break;
+                }
+                _ => lambda *= 10.0,
+            }
+        }
+        if !improved {
+            break;
+        }
+        jm = jacobian(&theta, &r)?;
+    }
+    Some(finish(theta, c, m, &jm, iterations))
+}
+
+fn finish(theta: Vec<f64>, cost: f64, m: usize, jm: &DMatrix<f64>, iterations: usize) -> LsqFit {
+    let n = theta.len();
+    let dof = (m as f64 - n as f64).max(1.0);
+    let s2 = cost / dof;
+    let jtj = jm.transpose() * jm;
+    let sigma = match jtj.try_inverse() {
+        Some(inv) => (0..n).map(|i| (s2 * inv[(i, i)]).max(0.0).sqrt()).collect(),
+        None => vec![f64::NAN; n],
+    };
+    LsqFit {
+        theta,
+        cost,
+        residuals: m,
+        sigma,
+        iterations,
+    }
+}
+
+/// Linear least squares `min |A x - b|` (SVD), with the one-sigma parameter uncertainty.
+pub fn linear(a: &DMatrix<f64>, b: &DVector<f64>) -> Option<(DVector<f64>, Vec<f64>)> {
+    let svd = a.clone().svd(true, true);
+    let x = svd.solve(b, 1e-12).ok()?;
+    let r = a * &x - b;
+    let dof = (a.nrows() as f64 - a.ncols() as f64).max(1.0);
+    let s2 = r.norm_squared() / dof;
+    let cov = (a.transpose() * a).try_inverse();
+    let sigma = match cov {
+        Some(c) => (0..a.ncols())
+            .map(|i| (s2 * c[(i, i)]).max(0.0).sqrt())
+            .collect(),
+        None => vec![f64::NAN; a.ncols()],
+    };
+    Some((x, sigma))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// Fit `y = a exp(-b t)` to exact data from a poor start.
+    #[test]
+    fn recovers_an_exponential() {
+        let t: Vec<f64> = (0..50).map(|i| i as f64 * 0.1).collect();
+        let y: Vec<f64> = t.iter().map(|t| 3.0 * (-0.7 * t).exp()).collect();
+        let f = minimise(
+            |p| {
+                Some(
+                    t.iter()
+                        .zip(&y)
+                        .map(|(t, y)| p[0] * (-p[1] * t).exp() - y)
+                        .collect(),
+                )
+            },
+            &[1.0, 2.0],
+            &[0.0, 0.0],
+            &[10.0, 10.0],
+            &[1.0, 1.0],
+            LsqOptions::default(),
+        )
+        .unwrap();
+        assert!(
+            (f.theta[0] - 3.0).abs() < 1e-6 && (f.theta[1] - 0.7).abs() < 1e-6,
+            "{:?}",
+            f.theta
+        );
+    }
+
+    #[test]
+    fn bounds_hold() {
+        let f = minimise(
+            |p| Some(vec![p[0] - 5.0]),
+            &[0.5],
+            &[0.0],
+            &[1.0],
+            &[1.0],
+            LsqOptions::default(),
+        )
+        .unwrap();
+        assert_eq!(f.theta[0], 1.0);
+    }
+}
