@@ -336,13 +336,32 @@ pub fn fit_servovalve(name: &str, rec: &Record, fs: f64) -> Result<ServovalveFit
 /// noise-free reference acceleration (`S_rF / S_ra`), then the linear least squares
 /// `Re = M - k/w^2`, `Im = -c/w` over [`MASS_BAND_HZ`].
 pub fn fit_mass(name: &str, rec: &Record, fs: f64) -> Result<MassFit, String> {
+    fit_mass_corrected(name, rec, fs, None)
+}
+
+/// [`fit_mass`] on the force less the identified friction and stiffness,
+/// `F_A - F_mu Z(x) - k x` (eqs. 4.4, 4.14-4.15 with `Z` along the measured path): the
+/// hysteretic friction is not exactly a viscous plus a stiffness term, and removing it in
+/// the time domain leaves the three-term fit only the residue.
+pub fn fit_mass_corrected(
+    name: &str,
+    rec: &Record,
+    fs: f64,
+    friction: Option<(&FrictionFit, f64)>,
+) -> Result<MassFit, String> {
     let w = welch_for(fs, rec.len()).map_err(|e| format!("{name}: {e}"))?;
+    let force: Vec<f64> = match friction {
+        Some((fr, k)) => {
+            let x = smooth(&rec.displacement_m, 8);
+            let z = bouc_wen_path(&x, fr.yield_displacement_m, fr.shape, 0.0);
+            (0..rec.len())
+                .map(|i| rec.force_n[i] - fr.force_n * z[i] - k * rec.displacement_m[i])
+                .collect()
+        }
+        None => rec.force_n.clone(),
+    };
     let e = w
-        .frf_instrumental(
-            &rec.ref_acceleration_m_s2,
-            &rec.acceleration_m_s2,
-            &rec.force_n,
-        )
+        .frf_instrumental(&rec.ref_acceleration_m_s2, &rec.acceleration_m_s2, &force)
         .map_err(|e| format!("{name}: {e}"))?;
     let idx = e.band(MASS_BAND_HZ[0], MASS_BAND_HZ[1]);
     if idx.len() < 5 {
@@ -651,14 +670,14 @@ fn spool_to_force_model(
 
 /// Oil column from R3 (4.1.3): `spool -> force` with the valve command as instrument,
 /// fitted with the actuator model for `k_oil`, `C_l` and a flow-gain scale; the table's
-/// `Z(s)` uses the final mass and R3's own viscous and stiffness-like terms.
+/// `Z(s) = F/x` uses the final mass plus R3's own measured non-inertial part of the
+/// apparent mass (the friction at R3's amplitude, bin by bin).
 pub fn fit_oil_column(
     name: &str,
     rec: &Record,
     fs: f64,
     geometry: &crate::campaign::Geometry,
     mass_kg: f64,
-    table_terms: (f64, f64),
 ) -> Result<OilColumnFit, String> {
     let x = spool(rec).ok_or_else(|| {
         format!("{name} has no spool_position channel: oil column not identified")
@@ -669,7 +688,16 @@ pub fn fit_oil_column(
         .map_err(|e| format!("{name}: {e}"))?;
     let area = geometry.piston_area_m2;
     let kq_a = geometry.flow_gain_m3_s * area;
-    let (c_visc, k_like) = table_terms;
+    // the table's own dissipative/elastic part at R3's amplitude, measured: the apparent
+    // mass of R3 less its fitted mass (friction is amplitude dependent, so R2's would not do)
+    let own = fit_mass(name, rec, fs)?;
+    let apparent = w
+        .frf_instrumental(
+            &rec.ref_acceleration_m_s2,
+            &rec.acceleration_m_s2,
+            &rec.force_n,
+        )
+        .map_err(|e| format!("{name}: {e}"))?;
     let fit_on = |h: &[Complex64], e: &FrfEstimate| -> Option<(lsq::LsqFit, Vec<usize>)> {
         let idx = e.band(OIL_BAND_HZ[0], OIL_BAND_HZ[1]);
         let k0 = mass_kg * (2.0 * PI * 14.0f64).powi(2);
@@ -678,7 +706,8 @@ pub fn fit_oil_column(
             let mut r = Vec::with_capacity(2 * idx.len());
             for &i in &idx {
                 let s = Complex64::new(0.0, 2.0 * PI * e.frequency_hz[i]);
-                let z = mass_kg * s * s + c_visc * s + k_like;
+                // Z(s) = F/x = s^2 (M + (F/a - M_R3))
+                let z = s * s * (mass_kg + apparent.h1[i] - own.mass_kg);
                 let m = spool_to_force_model(s, p[2] * kq_a, area, p[0], p[1], z);
                 let d = (m - h[i]) / h[i].norm().max(1e-9) * e.coherence[i].sqrt();
                 r.push(d.re);
@@ -844,6 +873,13 @@ pub fn identify(c: &Campaign) -> Identification {
     let mass_periodic = fit_mass_periodic(c, k, friction.as_ref())
         .map_err(|e| note(Err(e)))
         .ok();
+    // refine the random-data mass with the friction removed in the time domain
+    let mass_random = match (&mass_random, &friction, c.test("R2")) {
+        (Some(_), Some(fr), Some((_, r))) => fit_mass_corrected("R2", r, fs, Some((fr, k)))
+            .ok()
+            .or(mass_random),
+        _ => mass_random,
+    };
     // final mass: inverse-variance mean
     let mut num = 0.0;
     let mut den = 0.0;
@@ -874,12 +910,7 @@ pub fn identify(c: &Campaign) -> Identification {
         p.friction.shape = fr.shape.min(0.999);
     }
     let oil = match c.test("R3") {
-        Some((_, r)) => {
-            let terms = fit_mass("R3", r, fs)
-                .map(|m| (m.viscous_n_s_m, m.stiffness_like_n_m))
-                .unwrap_or((0.0, 0.0));
-            fit_oil_column("R3", r, fs, g, mass_kg, terms)
-        }
+        Some((_, r)) => fit_oil_column("R3", r, fs, g, mass_kg),
         None => Err("no R3 test: oil column not identified".into()),
     };
     let oil = oil.map_err(|e| note(Err(e))).ok();
