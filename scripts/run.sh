@@ -24,4 +24,11 @@ if [ -x scripts/build_fmu.sh ]; then
 fi
 
 echo
-echo "== done: report/ holds trees_lab.toml and frf/ (frf.csv, bode.png, figures.json)"
+echo "== 3. Identification (paper section 4) of the paper's campaign synthesised from the defaults"
+"$BIN" campaign synth --quiet --force --seed 1 report/campaign
+mkdir -p report/identification
+"$BIN" identify report/campaign --json report/identification/identified.json \
+    --params-out report/identification/identified.toml --report report/identification
+
+echo
+echo "== done: report/frf (analytic FRF), report/identification/index.html (identification report)"

@@ -25,7 +25,7 @@ fn check(label: &str, p: &Params, seed: u64) {
     let mut ok = true;
     let mut expect = |name: &str, err: f64, tol: f64| {
         report.push(format!(
-            "{name}: {:.2} % (tol {:.0} %)",
+            "{name}: {:.2} % (tol {:.1} %)",
             100.0 * err,
             100.0 * tol
         ));

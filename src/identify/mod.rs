@@ -249,7 +249,7 @@ pub fn fit_servovalve(name: &str, rec: &Record, fs: f64) -> Result<ServovalveFit
         let mut r = Vec::with_capacity(2 * f.len());
         for k in 0..f.len() {
             let s = Complex64::new(0.0, 2.0 * PI * f[k]);
-            let d = (model(s) - h[k]) / h[k].norm().max(1e-6) * wts[k];
+            let d = (model(s) - h[k]) * wts[k];
             r.push(d.re);
             r.push(d.im);
         }

@@ -269,7 +269,7 @@ pub fn write(
             "servovalve.png".into(),
             format!(
                 "Least squares on the complex FRF valve_command -> spool_position of {} over {:.1}-{:.0} Hz \
-                 (Welch H1; the command is noise-free). First order: tau = {:.2} ms (a band-dependent \
+                 (Welch H1, coherence-weighted complex least squares; the command is noise-free). First order: tau = {:.2} ms (a band-dependent \
                  equivalent when the valve is second order), RMS relative error {:.3}; its phase stays within \
                  5 degrees of the measurement up to {:.1} Hz. Second order: f_v = {:.2} Hz, xi = {:.3}, error {:.3}. \
                  Chosen: {} (the second order is chosen when it halves the error).",
