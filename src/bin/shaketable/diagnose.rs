@@ -1,8 +1,119 @@
-//! `shaketable diagnose` (not yet implemented).
+//! `shaketable diagnose DIR`: what the identified baseline misses, the physical cause,
+//! the extended model and its gain on held-out tests.
+
+use anyhow::Context;
+use shaketable::campaign::format::read_campaign;
+use shaketable::diagnose::{diagnose, CHANNELS};
+use std::path::PathBuf;
 
 #[derive(clap::Args)]
-pub struct Args {}
+pub struct Args {
+    /// Campaign directory (campaign.toml and one CSV per test).
+    campaign: PathBuf,
+    /// Write the diagnosis as JSON here.
+    #[arg(long)]
+    json: Option<PathBuf>,
+    /// Write the extended parameter file (baseline plus the chosen effect) here.
+    #[arg(long)]
+    params_out: Option<PathBuf>,
+    /// Write the report (index.html, README.md, figures) into this directory.
+    #[arg(long)]
+    report: Option<PathBuf>,
+    /// No progress bar.
+    #[arg(long)]
+    quiet: bool,
+}
 
-pub fn run(_args: Args) -> anyhow::Result<()> {
-    anyhow::bail!("`shaketable diagnose` is not implemented yet")
+pub fn run(args: Args) -> anyhow::Result<()> {
+    let t0 = std::time::Instant::now();
+    let campaign = read_campaign(&args.campaign)?;
+    let bar = (!args.quiet).then(|| {
+        let b = indicatif::ProgressBar::new(8);
+        b.set_style(
+            indicatif::ProgressStyle::with_template("{elapsed:>4} [{bar:30}] {pos}/{len} {msg}")
+                .unwrap_or_else(|_| indicatif::ProgressStyle::default_bar()),
+        );
+        b
+    });
+    let report = |i: usize, n: usize, what: &str| {
+        if let Some(b) = &bar {
+            b.set_length(n as u64);
+            b.set_position(i as u64);
+            b.set_message(what.to_string());
+        }
+    };
+    let d = diagnose(&campaign, Some(&report));
+    if let Some(b) = &bar {
+        b.finish_and_clear();
+    }
+    println!(
+        "diagnosis of {} ({:.1} s)",
+        args.campaign.display(),
+        t0.elapsed().as_secs_f64()
+    );
+    println!(
+        "baseline: servovalve {}, actuator {}; noise floor from {}",
+        d.valve_model.name(),
+        d.actuator_model.name(),
+        d.noise.method
+    );
+    println!(
+        "baseline residual / noise RMS per test ({}):",
+        CHANNELS.join(", ")
+    );
+    for (name, r) in &d.baseline_rows {
+        let cells: Vec<String> = r
+            .iter()
+            .map(|v| {
+                if v.is_finite() {
+                    format!("{v:8.2}")
+                } else {
+                    "       -".into()
+                }
+            })
+            .collect();
+        println!("  {name:4} {}", cells.join(" "));
+    }
+    println!(
+        "held-out tests: {}; baseline held-out residual {:.3}",
+        d.heldout_tests.join(", "),
+        d.baseline_heldout
+    );
+    println!("candidates (held-out residual, parameters):");
+    for c in &d.candidates {
+        let ps: Vec<String> = c
+            .parameters
+            .iter()
+            .map(|(k, v)| format!("{k}={v:.5}"))
+            .collect();
+        println!(
+            "  {:16} {:8.3}  {}",
+            c.effect.name(),
+            c.heldout_residual,
+            ps.join(", ")
+        );
+    }
+    let j = d.to_json();
+    println!(
+        "cause: {}  gain {:.2}  explained {}  parameters {}",
+        j["cause"].as_str().unwrap_or("none"),
+        d.gain,
+        d.explained,
+        j["parameters"]
+    );
+    if let Some(p) = &args.json {
+        std::fs::write(p, serde_json::to_string_pretty(&j)? + "\n")
+            .with_context(|| format!("cannot write {}", p.display()))?;
+        println!("wrote {}", p.display());
+    }
+    if let Some(p) = &args.params_out {
+        std::fs::write(p, d.extended.to_toml_string())
+            .with_context(|| format!("cannot write {}", p.display()))?;
+        println!("wrote {}", p.display());
+    }
+    if let Some(dir) = &args.report {
+        shaketable::report::diagnose::write(dir, &campaign, &d)?;
+        println!("wrote {}", dir.join("index.html").display());
+    }
+    Ok(())
 }
