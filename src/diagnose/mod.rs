@@ -48,8 +48,25 @@ pub const CHANNELS: [&str; 5] = [
     "valve_command",
 ];
 
-/// Tests the candidates are fitted on; the rest of the program is held out.
-pub const FIT_TESTS: [&str; 9] = ["R2", "S1", "S3", "S5", "S7", "S9", "T1", "T3", "T5"];
+/// Which samples of a test a residual uses: every test is split in time, its first half
+/// fits, its second half (never seen by any fit) scores. Every test type, and so every
+/// effect's signature, is on both sides of the split.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Part {
+    Whole,
+    Fit,
+    HeldOut,
+}
+
+impl Part {
+    pub fn range(self, n: usize) -> std::ops::Range<usize> {
+        match self {
+            Part::Whole => 0..n,
+            Part::Fit => 0..n / 2,
+            Part::HeldOut => n / 2..n,
+        }
+    }
+}
 
 /// Catalogue effects (spec section 7).
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize)]
@@ -94,9 +111,9 @@ impl Effect {
     /// The fitting tests where its signature lives.
     fn signature_tests(self) -> &'static [&'static str] {
         match self {
-            Effect::Specimen | Effect::Foundation => &["R2", "S3"],
-            Effect::StickSlip => &["S1", "S5", "T1", "T3"],
-            Effect::FlowSaturation => &["S3", "S9", "R2"],
+            Effect::Specimen | Effect::Foundation => &["R2", "R3"],
+            Effect::StickSlip => &["R2", "S1", "S5", "T1", "T3"],
+            Effect::FlowSaturation => &["S9", "S6", "R2"],
             Effect::ValveDeadband => &["R2", "T1", "T3", "S1"],
         }
     }
@@ -133,15 +150,15 @@ impl Effect {
     }
 
     /// Baseline parameters left free with the effect (indices into the refined baseline
-    /// `[M, beta, C_l, F_mu]`): those it interacts with and its tests constrain.
+    /// `[M, beta, C_l, F_mu, Y]`): those it interacts with and its tests constrain.
     fn free_baseline(self) -> &'static [usize] {
         match self {
             // the identified mass holds the specimen's; the oil column moves with both
-            Effect::Specimen | Effect::Foundation => &[0, 1, 2],
-            // slow tests: only the friction amplitude is seen
-            Effect::StickSlip => &[3],
-            Effect::FlowSaturation => &[0, 1],
-            Effect::ValveDeadband => &[3],
+            Effect::Specimen | Effect::Foundation => &[0, 1, 2, 3],
+            // the Bouc-Wen amplitude and yield displacement absorb stick-slip otherwise
+            Effect::StickSlip => &[0, 1, 2, 3, 4],
+            Effect::FlowSaturation => &[0, 1, 2, 3],
+            Effect::ValveDeadband => &[0, 1, 2, 3],
         }
     }
 
@@ -270,12 +287,14 @@ pub fn estimate_noise(c: &Campaign) -> NoiseFloor {
 }
 
 /// Simulate test `i` of the campaign with `p` and the test's controller gains.
-pub fn simulate_test(p: &Params, c: &Campaign, i: usize) -> Vec<Outputs> {
+pub fn simulate_test(p: &Params, c: &Campaign, i: usize, part: Part) -> Vec<Outputs> {
     let mut q = *p;
     q.controller = c.controller_for(&c.info.tests[i]);
+    let inputs = c.records[i].inputs();
+    let end = part.range(inputs.len()).end;
     simulate_record(
         &Model::new(&q),
-        &c.records[i].inputs(),
+        &inputs[..end],
         c.info.sample_rate_hz,
         None,
         DEFAULT_MAX_SUBSTEP_S,
@@ -302,27 +321,27 @@ fn simulated(o: &Outputs, ch: usize) -> f64 {
     }
 }
 
-/// Normalised residual RMS per channel (NaN where the channel is absent).
-fn ratios(r: &Record, sim: &[Outputs], noise: &NoiseFloor) -> [f64; 5] {
+/// Normalised residual RMS per channel over `part` (NaN where the channel is absent).
+fn ratios(r: &Record, sim: &[Outputs], noise: &NoiseFloor, part: Part) -> [f64; 5] {
     let mut out = [f64::NAN; 5];
+    let range = part.range(r.len());
     for (ch, o) in out.iter_mut().enumerate() {
         if let Some(m) = measured(r, ch) {
             let s = noise.of(ch);
-            if s.is_finite() {
-                let ss: f64 = m
-                    .iter()
-                    .zip(sim)
-                    .map(|(a, b)| (a - simulated(b, ch)).powi(2))
+            if s.is_finite() && !range.is_empty() {
+                let ss: f64 = range
+                    .clone()
+                    .map(|k| (m[k] - simulated(&sim[k], ch)).powi(2))
                     .sum();
-                *o = (ss / m.len().max(1) as f64).sqrt() / s;
+                *o = (ss / range.len() as f64).sqrt() / s;
             }
         }
     }
     out
 }
 
-/// Normalised residual samples of `tests` for least squares (every `step`-th sample,
-/// scaled so that the cost is the mean squared ratio per test and channel).
+/// Normalised residual samples of the fitting halves of `tests` for least squares (every
+/// `step`-th sample, scaled so that the cost is the mean squared ratio per test and channel).
 fn residual_vector(
     p: &Params,
     c: &Campaign,
@@ -336,8 +355,9 @@ fn residual_vector(
     let parts: Vec<Vec<f64>> = tests
         .par_iter()
         .map(|&i| {
-            let sim = simulate_test(p, c, i);
+            let sim = simulate_test(p, c, i, Part::Fit);
             let r = &c.records[i];
+            let range = Part::Fit.range(r.len());
             let mut v = Vec::new();
             for ch in 0..CHANNELS.len() {
                 if let Some(m) = measured(r, ch) {
@@ -345,9 +365,9 @@ fn residual_vector(
                     if !s.is_finite() {
                         continue;
                     }
-                    let n = (m.len() / step).max(1) as f64;
+                    let n = (range.len() / step).max(1) as f64;
                     let w = 1.0 / (s * n.sqrt());
-                    for k in (0..m.len()).step_by(step) {
+                    for k in range.clone().step_by(step) {
                         v.push((m[k] - simulated(&sim[k], ch)) * w);
                     }
                 }
@@ -370,7 +390,8 @@ fn summary(rows: &[[f64; 5]]) -> f64 {
     (v.iter().map(|x| x * x).sum::<f64>() / v.len().max(1) as f64).sqrt()
 }
 
-/// The baseline parameters refined by output error, as a vector: `[M, beta, C_l, F_mu]`.
+/// The baseline parameters refined by output error, as a vector: `[M, beta, C_l, F_mu, Y]`
+/// (the baseline refinement frees the first four, [`REFINED`]).
 /// The servovalve is not refined: its FRF (command -> spool) is measured directly and no
 /// table-side effect changes it, while output error would bend it to absorb them.
 fn baseline_theta(p: &Params) -> Vec<f64> {
@@ -379,14 +400,19 @@ fn baseline_theta(p: &Params) -> Vec<f64> {
         p.actuator.bulk_modulus_pa,
         p.actuator.leakage_m3_s_pa,
         p.friction.force_n,
+        p.friction.yield_displacement_m,
     ]
 }
+
+/// Indices of [`baseline_theta`] refined for the baseline.
+const REFINED: [usize; 4] = [0, 1, 2, 3];
 
 fn set_baseline(p: &mut Params, t: &[f64]) {
     p.table.mass_kg = t[0];
     p.actuator.bulk_modulus_pa = t[1];
     p.actuator.leakage_m3_s_pa = t[2];
     p.friction.force_n = t[3];
+    p.friction.yield_displacement_m = t[4];
 }
 
 fn baseline_bounds(p: &Params) -> (Vec<f64>, Vec<f64>, Vec<f64>) {
@@ -481,11 +507,18 @@ fn starts(effect: Effect, c: &Campaign, base: &Params) -> Vec<Vec<f64>> {
             [0.1, 0.3].iter().map(|r| vec![r * m, fs, 0.03]).collect()
         }
         Effect::Foundation => {
-            // the foundation moves the LVDT: x_f = a/(-w^2) - x_lvdt; F/x_f = -(k_f - M_f w^2 + j w c_f)
-            let guess = foundation_guess(c).unwrap_or([5e5, 20.0, 0.05]);
-            vec![guess.to_vec()]
+            let f = foundation_frequency(c).unwrap_or(20.0);
+            vec![vec![2.0 * m, f, 0.05], vec![20.0 * m, f, 0.05]]
         }
-        Effect::StickSlip => vec![vec![2.0, 0.003], vec![3.0, 0.006]],
+        Effect::StickSlip => {
+            let mut g = Vec::new();
+            for r in [1.5, 2.5, 3.5] {
+                for v in [0.002, 0.006] {
+                    g.push(vec![r, v]);
+                }
+            }
+            g
+        }
         Effect::FlowSaturation => {
             // the velocity plateau of the fastest sines
             let mut vmax: f64 = 0.0;
@@ -506,46 +539,24 @@ fn starts(effect: Effect, c: &Campaign, base: &Params) -> Vec<Vec<f64>> {
     }
 }
 
-/// Linear least squares for the foundation from R2 (see [`starts`]).
-fn foundation_guess(c: &Campaign) -> Option<[f64; 3]> {
+/// Foundation starting frequency from R2: the reaction mass moves the LVDT, so the
+/// absolute displacement `a / (-w^2)` departs from the LVDT reading most near its mode.
+fn foundation_frequency(c: &Campaign) -> Option<f64> {
     let (_, r) = c.test("R2")?;
     let fs = c.info.sample_rate_hz;
-    let w = Welch::new(
-        fs,
-        WelchOptions::for_resolution(fs, 0.25).fit_to(r.len(), 8),
-    )
-    .ok()?;
-    let fa = w
-        .frf_instrumental(&r.ref_acceleration_m_s2, &r.acceleration_m_s2, &r.force_n)
-        .ok()?;
-    let fx = w
-        .frf_instrumental(&r.ref_acceleration_m_s2, &r.displacement_m, &r.force_n)
-        .ok()?;
-    let idx = fa.band(3.0, 60.0);
-    let mut a = nalgebra::DMatrix::zeros(2 * idx.len(), 3);
-    let mut b = nalgebra::DVector::zeros(2 * idx.len());
-    for (row, &i) in idx.iter().enumerate() {
-        let om = 2.0 * PI * fa.frequency_hz[i];
-        // x_f per unit force: (1/(-w^2)) / (F/a) - 1/(F/x)
-        let xf = 1.0 / (-om * om * fa.h1[i]) - 1.0 / fx.h1[i];
-        let g = -1.0 / xf; // = k_f - M_f w^2 + j w c_f
-        a[(2 * row, 0)] = 1.0;
-        a[(2 * row, 1)] = -om * om;
-        b[2 * row] = g.re;
-        a[(2 * row + 1, 2)] = om;
-        b[2 * row + 1] = g.im;
-    }
-    let (x, _) = crate::identify::lsq::linear(&a, &b)?;
-    let (kf, mf, cf) = (x[0], x[1], x[2]);
-    if !(kf > 0.0 && mf > 0.0) {
-        return None;
-    }
-    let wf = (kf / mf).sqrt();
-    Some([
-        mf,
-        wf / (2.0 * PI),
-        (cf / (2.0 * mf * wf)).clamp(0.005, 0.4),
-    ])
+    let w = Welch::new(fs, WelchOptions::for_resolution(fs, 0.5).fit_to(r.len(), 8)).ok()?;
+    let e = w.frf(&r.displacement_m, &r.acceleration_m_s2).ok()?;
+    let idx = e.band(3.0, 60.0);
+    idx.iter()
+        .map(|&i| {
+            let om = 2.0 * PI * e.frequency_hz[i];
+            (
+                e.frequency_hz[i],
+                (e.h1[i] / (-om * om) - 1.0).norm() * e.coherence[i],
+            )
+        })
+        .max_by(|a, b| a.1.total_cmp(&b.1))
+        .map(|x| x.0)
 }
 
 /// Progress callback: (step done, steps in all, what).
@@ -562,10 +573,9 @@ pub fn diagnose(c: &Campaign, progress: Option<Progress>) -> Diagnosis {
     let id = identify(c);
     let noise = estimate_noise(c);
     let mut base = id.params;
-    let fit_idx = indices(c, &FIT_TESTS);
-    let heldout_idx: Vec<usize> = (0..c.info.tests.len())
-        .filter(|i| !fit_idx.contains(i))
-        .collect();
+    // every test: fitted on its first half, scored on its second
+    let fit_idx: Vec<usize> = (0..c.info.tests.len()).collect();
+    let heldout_idx = fit_idx.clone();
     let opts = LsqOptions {
         max_iterations: 12,
         tolerance: 1e-4,
@@ -580,20 +590,29 @@ pub fn diagnose(c: &Campaign, progress: Option<Progress>) -> Diagnosis {
         let mut b0 = base;
         b0.actuator.model = model;
         let (lo, hi, scale) = baseline_bounds(&b0);
+        let all = baseline_theta(&b0);
+        let pick = |v: &[f64]| -> Vec<f64> { REFINED.iter().map(|&j| v[j]).collect() };
+        let full = |t: &[f64]| {
+            let mut v = all.clone();
+            for (k, &j) in REFINED.iter().enumerate() {
+                v[j] = t[k];
+            }
+            v
+        };
         match minimise(
             |t| {
                 let mut p = b0;
-                set_baseline(&mut p, t);
+                set_baseline(&mut p, &full(t));
                 residual_vector(&p, c, &fit_idx, &noise, step)
             },
-            &baseline_theta(&b0),
-            &lo,
-            &hi,
-            &scale,
+            &pick(&all),
+            &pick(&lo),
+            &pick(&hi),
+            &pick(&scale),
             opts,
         ) {
             Some(fit) => {
-                set_baseline(&mut b0, &fit.theta);
+                set_baseline(&mut b0, &full(&fit.theta));
                 (fit.cost, b0)
             }
             None => (f64::INFINITY, b0),
@@ -615,20 +634,45 @@ pub fn diagnose(c: &Campaign, progress: Option<Progress>) -> Diagnosis {
         .map(|i| {
             (
                 c.info.tests[i].name.clone(),
-                ratios(&c.records[i], &simulate_test(&base, c, i), &noise),
+                ratios(
+                    &c.records[i],
+                    &simulate_test(&base, c, i, Part::Whole),
+                    &noise,
+                    Part::Whole,
+                ),
             )
         })
         .collect();
-    let held = |rows: &[(String, [f64; 5])]| -> Vec<[f64; 5]> {
-        heldout_idx.iter().map(|&i| rows[i].1).collect()
-    };
-    let baseline_heldout = summary(&held(&baseline_rows));
-    // 3. candidates
+    let baseline_heldout_rows: Vec<[f64; 5]> = heldout_idx
+        .par_iter()
+        .map(|&i| {
+            ratios(
+                &c.records[i],
+                &simulate_test(&base, c, i, Part::Whole),
+                &noise,
+                Part::HeldOut,
+            )
+        })
+        .collect();
+    let baseline_heldout = summary(&baseline_heldout_rows);
+    // 3. candidates start from the section-4 estimates (the output-error baseline has
+    //    bent its parameters to absorb the missing effect) with the chosen actuator
+    let mut candidate_base = id.params;
+    candidate_base.actuator.model = base.actuator.model;
     let done = std::sync::atomic::AtomicUsize::new(2);
     let candidates: Vec<Candidate> = EFFECTS
         .par_iter()
         .filter_map(|&e| {
-            let cand = fit_candidate(e, c, &base, &fit_idx, &heldout_idx, &noise, opts, step);
+            let cand = fit_candidate(
+                e,
+                c,
+                &[base, candidate_base],
+                &fit_idx,
+                &heldout_idx,
+                &noise,
+                opts,
+                step,
+            );
             let n = done.fetch_add(1, std::sync::atomic::Ordering::Relaxed);
             tick(n + 1, e.name());
             cand
@@ -678,7 +722,7 @@ pub fn diagnose(c: &Campaign, progress: Option<Progress>) -> Diagnosis {
 fn fit_candidate(
     e: Effect,
     c: &Campaign,
-    base: &Params,
+    bases: &[Params],
     fit_idx: &[usize],
     heldout_idx: &[usize],
     noise: &NoiseFloor,
@@ -689,18 +733,24 @@ fn fit_candidate(
         .into_iter()
         .filter(|i| fit_idx.contains(i))
         .collect();
+    let sig = if sig.is_empty() {
+        fit_idx.to_vec()
+    } else {
+        sig
+    };
     if sig.is_empty() {
         return None;
     }
     let ne = e.parameters().len();
     let free = e.free_baseline();
     let (elo, ehi) = e.bounds();
-    let (blo, bhi, bscale) = baseline_bounds(base);
-    let b_all = baseline_theta(base);
-    let assemble = |t: &[f64]| {
+    let (blo, bhi, bscale) = baseline_bounds(&bases[0]);
+    let base = &bases[0];
+    // the effect's parameters, then the free baseline ones; the others from `fixed`
+    let assemble = |t: &[f64], fixed: &[f64]| {
         let mut p = *base;
         e.apply(&mut p, &t[..ne]);
-        let mut b = b_all.clone();
+        let mut b = fixed.to_vec();
         for (k, &j) in free.iter().enumerate() {
             b[j] = t[ne + k];
         }
@@ -717,25 +767,43 @@ fn fit_candidate(
         .copied()
         .chain(free.iter().map(|&j| bhi[j]))
         .collect();
-    let mut best: Option<(f64, Vec<f64>)> = None;
-    for s in starts(e, c, base) {
-        let mut b = b_all.clone();
-        if e == Effect::Specimen {
-            // the identified mass holds the specimen's mass at low frequency
-            b[0] = (b[0] - s[0]).max(0.3 * b[0]);
+    // every start of the effect on every baseline, screened by one evaluation each
+    let mut all: Vec<(Vec<f64>, Vec<f64>)> = Vec::new();
+    for b in bases {
+        for s in starts(e, c, b) {
+            let mut bt = baseline_theta(b);
+            if e == Effect::Specimen {
+                // the identified mass holds the specimen's mass at low frequency
+                bt[0] = (bt[0] - s[0]).max(0.3 * bt[0]);
+            }
+            let t0: Vec<f64> = s
+                .iter()
+                .copied()
+                .chain(free.iter().map(|&j| bt[j]))
+                .collect();
+            all.push((t0, bt));
         }
-        let t0: Vec<f64> = s
-            .iter()
-            .copied()
-            .chain(free.iter().map(|&j| b[j]))
-            .collect();
-        let scale: Vec<f64> = s
+    }
+    if all.len() > 2 {
+        let cost_of = |(t, b): &(Vec<f64>, Vec<f64>)| {
+            residual_vector(&assemble(t, b), c, &sig, noise, step)
+                .map(|r| r.iter().map(|x| x * x).sum::<f64>())
+                .unwrap_or(f64::INFINITY)
+        };
+        let mut scored: Vec<(f64, (Vec<f64>, Vec<f64>))> =
+            all.into_iter().map(|s| (cost_of(&s), s)).collect();
+        scored.sort_by(|a, b| a.0.total_cmp(&b.0));
+        all = scored.into_iter().take(2).map(|x| x.1).collect();
+    }
+    let mut best: Option<(f64, Vec<f64>, Vec<f64>)> = None;
+    for (t0, fixed) in all {
+        let scale: Vec<f64> = t0[..ne]
             .iter()
             .map(|x| x.abs().max(1e-4))
             .chain(free.iter().map(|&j| bscale[j]))
             .collect();
         if let Some(f) = minimise(
-            |t| residual_vector(&assemble(t), c, &sig, noise, step),
+            |t| residual_vector(&assemble(t, &fixed), c, &sig, noise, step),
             &t0,
             &lo,
             &hi,
@@ -743,15 +811,22 @@ fn fit_candidate(
             opts,
         ) {
             if best.as_ref().map(|b| f.cost < b.0).unwrap_or(true) {
-                best = Some((f.cost, f.theta));
+                best = Some((f.cost, f.theta, fixed));
             }
         }
     }
-    let (cost, theta) = best?;
-    let p = assemble(&theta);
+    let (cost, theta, fixed) = best?;
+    let p = assemble(&theta, &fixed);
     let rows: Vec<[f64; 5]> = heldout_idx
         .par_iter()
-        .map(|&i| ratios(&c.records[i], &simulate_test(&p, c, i), noise))
+        .map(|&i| {
+            ratios(
+                &c.records[i],
+                &simulate_test(&p, c, i, Part::Whole),
+                noise,
+                Part::HeldOut,
+            )
+        })
         .collect();
     let heldout = summary(&rows);
     Some(Candidate {
