@@ -4,6 +4,7 @@
 mod bench;
 mod campaign;
 mod diagnose;
+mod fmu;
 mod frf;
 mod identify;
 mod params;
@@ -38,6 +39,8 @@ enum Command {
     Diagnose(diagnose::Args),
     /// Real-time factors of the simulator and of campaign synthesis.
     Bench(bench::Args),
+    /// The FMU's generated files (modelDescription.xml, documentation); see scripts/build_fmu.sh.
+    Fmu(fmu::Args),
 }
 
 fn main() {
@@ -57,6 +60,7 @@ fn main() {
         Command::Identify(a) => identify::run(a),
         Command::Diagnose(a) => diagnose::run(a),
         Command::Bench(a) => bench::run(a),
+        Command::Fmu(a) => fmu::run(a),
     };
     if let Err(e) = result {
         eprintln!("error: {e:#}");

@@ -1,0 +1,44 @@
+#!/usr/bin/env bash
+# Build the FMI 2.0 Co-Simulation FMU: target/fmu/ShakeTable.fmu
+#   scripts/build_fmu.sh                    # TREES Lab defaults as start values
+#   scripts/build_fmu.sh --params lab.toml  # a lab's parameter file baked in
+# The cdylib is built in release and packaged with modelDescription.xml (generated from
+# the variable table), documentation/index.html and, with --params, resources/parameters.toml
+# (read by fmi2Instantiate, so the binary starts from the same values the XML declares).
+set -euo pipefail
+ROOT="$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)"
+cd "$ROOT"
+PARAMS=""
+OUT="$ROOT/target/fmu/ShakeTable.fmu"
+while [ $# -gt 0 ]; do
+  case "$1" in
+    --params) PARAMS="$(cd "$(dirname "$2")" && pwd)/$(basename "$2")"; shift 2 ;;
+    --out) OUT="$2"; shift 2 ;;
+    *) echo "build_fmu.sh: unknown option $1 (use --params FILE, --out FILE)" >&2; exit 2 ;;
+  esac
+done
+cargo build --release --locked --lib --bin shaketable
+BIN="$ROOT/target/release/shaketable"
+STAGE="$ROOT/target/fmu/stage"
+rm -rf "$STAGE"
+mkdir -p "$STAGE/binaries/linux64" "$STAGE/documentation" "$(dirname "$OUT")"
+ARGS=()
+if [ -n "$PARAMS" ]; then
+  "$BIN" params --check "$PARAMS" > /dev/null
+  ARGS=(--params "$PARAMS")
+  mkdir -p "$STAGE/resources"
+  cp "$PARAMS" "$STAGE/resources/parameters.toml"
+fi
+"$BIN" fmu description "${ARGS[@]}" > "$STAGE/modelDescription.xml"
+"$BIN" fmu documentation "${ARGS[@]}" > "$STAGE/documentation/index.html"
+cp "$ROOT/target/release/libshaketable.so" "$STAGE/binaries/linux64/ShakeTable.so"
+python3 - "$STAGE" "$OUT" <<'PY'
+import os, sys, zipfile
+stage, out = sys.argv[1], sys.argv[2]
+with zipfile.ZipFile(out, "w", zipfile.ZIP_DEFLATED) as z:
+    for d, _, files in sorted(os.walk(stage)):
+        for f in sorted(files):
+            p = os.path.join(d, f)
+            z.write(p, os.path.relpath(p, stage))
+PY
+echo "wrote $OUT"

@@ -1,0 +1,41 @@
+//! `shaketable fmu`: the files of the FMU generated from the variable table (used by
+//! scripts/build_fmu.sh): modelDescription.xml and documentation/index.html, with a
+//! parameter file's values as start values.
+
+use std::path::PathBuf;
+
+#[derive(clap::Args)]
+pub struct Args {
+    #[command(subcommand)]
+    what: What,
+}
+
+#[derive(clap::Subcommand)]
+enum What {
+    /// Print modelDescription.xml.
+    Description {
+        /// Parameter file whose values become the start values (defaults when omitted).
+        #[arg(long)]
+        params: Option<PathBuf>,
+    },
+    /// Print documentation/index.html (the variable table).
+    Documentation {
+        #[arg(long)]
+        params: Option<PathBuf>,
+    },
+}
+
+pub fn run(args: Args) -> anyhow::Result<()> {
+    use shaketable::fmi::model_description::{documentation_html, model_description_xml};
+    match args.what {
+        What::Description { params } => print!(
+            "{}",
+            model_description_xml(&crate::load_params(params.as_deref())?)
+        ),
+        What::Documentation { params } => print!(
+            "{}",
+            documentation_html(&crate::load_params(params.as_deref())?)
+        ),
+    }
+    Ok(())
+}
