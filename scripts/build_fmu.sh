@@ -19,9 +19,10 @@ while [ $# -gt 0 ]; do
 done
 cargo build --release --locked --lib --bin shaketable
 BIN="$ROOT/target/release/shaketable"
-STAGE="$ROOT/target/fmu/stage"
-rm -rf "$STAGE"
-mkdir -p "$STAGE/binaries/linux64" "$STAGE/documentation" "$(dirname "$OUT")"
+mkdir -p "$(dirname "$OUT")"
+OUT="$(cd "$(dirname "$OUT")" && pwd)/$(basename "$OUT")"
+STAGE="$(dirname "$OUT")/.stage-$(basename "$OUT" .fmu)-$$"
+mkdir -p "$STAGE/binaries/linux64" "$STAGE/documentation"
 ARGS=()
 if [ -n "$PARAMS" ]; then
   "$BIN" params --check "$PARAMS" > /dev/null
@@ -41,4 +42,5 @@ with zipfile.ZipFile(out, "w", zipfile.ZIP_DEFLATED) as z:
             p = os.path.join(d, f)
             z.write(p, os.path.relpath(p, stage))
 PY
+rm -rf "$STAGE"
 echo "wrote $OUT"

@@ -114,7 +114,10 @@ impl Effect {
     /// The fitting tests where its signature lives.
     fn signature_tests(self) -> &'static [&'static str] {
         match self {
-            Effect::Specimen | Effect::Foundation => &["R2", "R3"],
+            Effect::Specimen => &["R2", "R3"],
+            // the broadest random test shows a stiff foundation's mode, the largest
+            // forces its deflection in the LVDT
+            Effect::Foundation => &["R1", "R3", "S9"],
             Effect::StickSlip => &["R2", "S1", "S5", "T1", "T3"],
             Effect::FlowSaturation => &["S9", "S6", "R2"],
             Effect::ValveDeadband => &["R2", "T1", "T3", "S1"],
@@ -510,8 +513,14 @@ fn starts(effect: Effect, c: &Campaign, base: &Params) -> Vec<Vec<f64>> {
             [0.1, 0.3].iter().map(|r| vec![r * m, fs, 0.03]).collect()
         }
         Effect::Foundation => {
-            let f = foundation_frequency(c).unwrap_or(20.0);
-            vec![vec![2.0 * m, f, 0.05], vec![20.0 * m, f, 0.05]]
+            // the FRF guess and a spread over the plausible band, screened by the caller
+            let mut g = Vec::new();
+            for f in foundation_frequency(c).into_iter().chain([8.0, 15.0, 25.0, 40.0]) {
+                for r in [3.0, 20.0] {
+                    g.push(vec![r * m, f, 0.05]);
+                }
+            }
+            g
         }
         Effect::StickSlip => {
             let mut g = Vec::new();
@@ -542,14 +551,14 @@ fn starts(effect: Effect, c: &Campaign, base: &Params) -> Vec<Vec<f64>> {
     }
 }
 
-/// Foundation starting frequency from R2: the reaction mass moves the LVDT, so the
+/// Foundation starting frequency from R3 (the broadest band): the reaction mass moves the LVDT, so the
 /// absolute displacement `a / (-w^2)` departs from the LVDT reading most near its mode.
 fn foundation_frequency(c: &Campaign) -> Option<f64> {
-    let (_, r) = c.test("R2")?;
+    let (_, r) = c.test("R3").or_else(|| c.test("R2"))?;
     let fs = c.info.sample_rate_hz;
     let w = Welch::new(fs, WelchOptions::for_resolution(fs, 0.5).fit_to(r.len(), 8)).ok()?;
     let e = w.frf(&r.displacement_m, &r.acceleration_m_s2).ok()?;
-    let idx = e.band(3.0, 60.0);
+    let idx = e.band(3.0, 100.0);
     idx.iter()
         .map(|&i| {
             let om = 2.0 * PI * e.frequency_hz[i];

@@ -1,0 +1,445 @@
+//! The FMU's C ABI exercised in-process (the exported functions of the crate, called
+//! through their FMI 2.0 signatures): equality with the library simulator, state
+//! get/set/serialize, independent instances, reset, step-size independence, and a property
+//! test of random call sequences (no crash, an allowed status, a logged message per error).
+
+use fmi_sys::fmi2::*;
+use proptest::prelude::*;
+use shaketable::fmi::export::*;
+use shaketable::fmi::model_description::GUID;
+use shaketable::solver::DEFAULT_MAX_SUBSTEP_S;
+use shaketable::{Model, Params, SensorNoise, Simulator};
+use std::ffi::CString;
+use std::sync::{Mutex, Once};
+
+/// Messages the FMU logged, per instance name (fmi-sys' logger forwards to `log`).
+static LOGGED: Mutex<Vec<(String, String)>> = Mutex::new(Vec::new());
+struct Collect;
+impl log::Log for Collect {
+    fn enabled(&self, _: &log::Metadata) -> bool {
+        true
+    }
+    fn log(&self, r: &log::Record) {
+        LOGGED
+            .lock()
+            .unwrap()
+            .push((r.target().to_string(), r.args().to_string()));
+    }
+    fn flush(&self) {}
+}
+static INIT: Once = Once::new();
+
+fn logged(instance: &str) -> Vec<String> {
+    LOGGED
+        .lock()
+        .unwrap()
+        .iter()
+        .filter(|(t, _)| t == instance)
+        .map(|(_, m)| m.clone())
+        .collect()
+}
+
+struct Fmu {
+    c: fmi2Component,
+    _name: CString,
+    _cb: Box<fmi2CallbackFunctions>,
+}
+
+impl Fmu {
+    fn new(name: &str) -> Fmu {
+        INIT.call_once(|| {
+            let _ = log::set_logger(&Collect);
+            log::set_max_level(log::LevelFilter::Trace);
+        });
+        let cb = Box::new(fmi2CallbackFunctions {
+            logger: Some(fmi_sys::fmi2::logger::callback_logger_handler),
+            allocateMemory: None,
+            freeMemory: None,
+            stepFinished: None,
+            componentEnvironment: std::ptr::null_mut(),
+        });
+        let n = CString::new(name).unwrap();
+        let guid = CString::new(GUID).unwrap();
+        let c = unsafe {
+            fmi2Instantiate(
+                n.as_ptr(),
+                fmi2Type_fmi2CoSimulation,
+                guid.as_ptr(),
+                std::ptr::null(),
+                &*cb,
+                0,
+                0,
+            )
+        };
+        assert!(!c.is_null());
+        Fmu {
+            c,
+            _name: n,
+            _cb: cb,
+        }
+    }
+
+    fn init(&self) {
+        unsafe {
+            assert_eq!(fmi2SetupExperiment(self.c, 0, 0.0, 0.0, 0, 0.0), 0);
+            assert_eq!(fmi2EnterInitializationMode(self.c), 0);
+            assert_eq!(fmi2ExitInitializationMode(self.c), 0);
+        }
+    }
+
+    fn set(&self, vr: &[u32], v: &[f64]) -> fmi2Status {
+        unsafe { fmi2SetReal(self.c, vr.as_ptr(), vr.len(), v.as_ptr()) }
+    }
+
+    fn slopes(&self, vr: &[u32], v: &[f64]) -> fmi2Status {
+        let order = vec![1; vr.len()];
+        unsafe {
+            fmi2SetRealInputDerivatives(self.c, vr.as_ptr(), vr.len(), order.as_ptr(), v.as_ptr())
+        }
+    }
+
+    fn get(&self, vr: &[u32]) -> Vec<f64> {
+        let mut v = vec![0.0; vr.len()];
+        assert_eq!(
+            unsafe { fmi2GetReal(self.c, vr.as_ptr(), vr.len(), v.as_mut_ptr()) },
+            0
+        );
+        v
+    }
+
+    fn step(&self, t: f64, h: f64) -> fmi2Status {
+        unsafe { fmi2DoStep(self.c, t, h, 1) }
+    }
+}
+
+impl Drop for Fmu {
+    fn drop(&mut self) {
+        unsafe { fmi2FreeInstance(self.c) };
+    }
+}
+
+const INPUTS: [u32; 3] = [0, 1, 2];
+const OUTPUTS: [u32; 8] = [10, 11, 12, 13, 14, 15, 16, 17];
+
+/// Reference sample k of a 3 Hz, 5 mm sine at `fs`.
+fn reference(k: usize, fs: f64) -> [f64; 3] {
+    let w = 2.0 * std::f64::consts::PI * 3.0;
+    let t = k as f64 / fs;
+    [
+        0.005 * (w * t).sin(),
+        0.005 * w * (w * t).cos(),
+        -0.005 * w * w * (w * t).sin(),
+    ]
+}
+
+/// The 512 Hz reference linearly interpolated at `fs` (a multiple of 512 Hz): the same
+/// continuous input whatever the communication step.
+fn reference_at(k: usize, fs: f64) -> [f64; 3] {
+    let m = (fs / 512.0).round() as usize;
+    let (i, j) = (k / m, k % m);
+    let (a, b) = (reference(i, 512.0), reference(i + 1, 512.0));
+    let w = j as f64 / m as f64;
+    [0, 1, 2].map(|n| a[n] + w * (b[n] - a[n]))
+}
+
+/// Drive the FMU with linearly interpolated inputs (values and slopes each step).
+fn drive(f: &Fmu, from: usize, to: usize, fs: f64) -> Vec<Vec<f64>> {
+    let h = 1.0 / fs;
+    let mut out = Vec::new();
+    for k in from..to {
+        let (a, b) = (reference_at(k, fs), reference_at(k + 1, fs));
+        assert_eq!(f.set(&INPUTS, &a), 0);
+        let s: Vec<f64> = (0..3).map(|i| (b[i] - a[i]) / h).collect();
+        assert_eq!(f.slopes(&INPUTS, &s), 0);
+        assert_eq!(f.step(k as f64 * h, h), 0);
+        assert_eq!(f.set(&INPUTS, &b), 0);
+        out.push(f.get(&OUTPUTS));
+    }
+    out
+}
+
+/// The boundary adds nothing: the FMU equals the library's simulator within 1e-9.
+#[test]
+fn fmu_equals_the_library_simulator() {
+    let fs = 512.0;
+    let f = Fmu::new("equal");
+    f.init();
+    let got = drive(&f, 0, 1024, fs);
+    let mut sim = Simulator::new(Model::new(&Params::trees_lab()), 0.0, DEFAULT_MAX_SUBSTEP_S);
+    let inp = |k: usize| {
+        let r = reference(k, fs);
+        shaketable::fmi::variables::inputs_from(&[r[0], r[1], r[2], 0.0])
+    };
+    let mut worst: f64 = 0.0;
+    for k in 0..1024 {
+        sim.advance(1.0 / fs, &inp(k), &inp(k + 1), &SensorNoise::default());
+        sim.time_s = (k + 1) as f64 / fs;
+        let o = sim.outputs(&inp(k + 1), &SensorNoise::default());
+        let lib = [
+            o.displacement_m,
+            o.velocity_m_s,
+            o.acceleration_m_s2,
+            o.actuator_force_n,
+            o.valve_command,
+            o.spool_position,
+            o.pressure_a_pa,
+            o.pressure_b_pa,
+        ];
+        for i in 0..8 {
+            worst = worst.max(
+                (got[k][i] - lib[i]).abs()
+                    / lib[i].abs().max(1e-12 * (1.0 + lib[i].abs())).max(1e-300),
+            );
+        }
+    }
+    assert!(worst <= 1e-9, "largest relative difference {worst:e}");
+}
+
+/// Results at 1/512 s and 1/1024 s communication steps agree within the solver's accuracy
+/// (the same piecewise-linear input at both steps).
+#[test]
+fn communication_step_does_not_change_the_answer() {
+    let a = Fmu::new("coarse");
+    a.init();
+    let b = Fmu::new("fine");
+    b.init();
+    let ra = drive(&a, 0, 1024, 512.0);
+    let rb = drive(&b, 0, 2048, 1024.0);
+    // compare the force at common times, relative to its RMS
+    let fa: Vec<f64> = ra.iter().map(|o| o[3]).collect();
+    let fb: Vec<f64> = rb.iter().skip(1).step_by(2).map(|o| o[3]).collect();
+    let rms = (fa.iter().map(|x| x * x).sum::<f64>() / fa.len() as f64).sqrt();
+    let diff = (fa
+        .iter()
+        .zip(&fb)
+        .map(|(x, y)| (x - y).powi(2))
+        .sum::<f64>()
+        / fa.len() as f64)
+        .sqrt();
+    assert!(
+        diff / rms < 1e-6,
+        "relative RMS difference {:e}",
+        diff / rms
+    );
+}
+
+#[test]
+fn fmu_state_get_set_and_serialize_continue_bit_identically() {
+    let fs = 512.0;
+    let f = Fmu::new("state");
+    f.init();
+    drive(&f, 0, 300, fs);
+    let mut s: fmi2FMUstate = std::ptr::null_mut();
+    assert_eq!(unsafe { fmi2GetFMUstate(f.c, &mut s) }, 0);
+    let mut size = 0usize;
+    assert_eq!(unsafe { fmi2SerializedFMUstateSize(f.c, s, &mut size) }, 0);
+    let mut bytes = vec![0 as fmi2Byte; size];
+    assert_eq!(
+        unsafe { fmi2SerializeFMUstate(f.c, s, bytes.as_mut_ptr(), size) },
+        0
+    );
+    let first = drive(&f, 300, 600, fs);
+    // back to the saved state
+    assert_eq!(unsafe { fmi2SetFMUstate(f.c, s) }, 0);
+    let again = drive(&f, 300, 600, fs);
+    // through the serialized bytes, in a fresh instance
+    let g = Fmu::new("state2");
+    let mut s2: fmi2FMUstate = std::ptr::null_mut();
+    assert_eq!(
+        unsafe { fmi2DeSerializeFMUstate(g.c, bytes.as_ptr(), size, &mut s2) },
+        0
+    );
+    assert_eq!(unsafe { fmi2SetFMUstate(g.c, s2) }, 0);
+    let third = drive(&g, 300, 600, fs);
+    let bits = |v: &Vec<Vec<f64>>| v.iter().flatten().map(|x| x.to_bits()).collect::<Vec<_>>();
+    assert_eq!(bits(&first), bits(&again));
+    assert_eq!(bits(&first), bits(&third));
+    unsafe {
+        assert_eq!(fmi2FreeFMUstate(f.c, &mut s), 0);
+        assert_eq!(fmi2FreeFMUstate(g.c, &mut s2), 0);
+    }
+    assert!(s.is_null());
+}
+
+#[test]
+fn instances_are_independent_and_reset_restarts() {
+    let fs = 512.0;
+    let alone = Fmu::new("alone");
+    alone.init();
+    let ra = drive(&alone, 0, 200, fs);
+    let a = Fmu::new("a");
+    let b = Fmu::new("b");
+    assert_eq!(b.set(&[130], &[2.0 * 41258.0]), 0);
+    a.init();
+    b.init();
+    // b gets a heavier table before it runs: it must not leak into a
+    let mut rows = Vec::new();
+    for k in 0..200 {
+        rows.push(drive(&a, k, k + 1, fs).remove(0));
+        drive(&b, k, k + 1, fs);
+    }
+    let bits = |v: &Vec<Vec<f64>>| v.iter().flatten().map(|x| x.to_bits()).collect::<Vec<_>>();
+    assert_eq!(bits(&ra), bits(&rows));
+    // reset: start values back, a fresh run equals the first
+    assert_eq!(unsafe { fmi2Reset(a.c) }, 0);
+    a.init();
+    let again = drive(&a, 0, 200, fs);
+    assert_eq!(bits(&ra), bits(&again));
+}
+
+#[test]
+fn bad_calls_are_errors_with_messages() {
+    let f = Fmu::new("bad");
+    // step before initialization
+    assert_eq!(f.step(0.0, 0.01), fmi2Status_fmi2Error);
+    assert!(
+        logged("bad")
+            .iter()
+            .any(|m| m.contains("fmi2DoStep") && m.contains("not allowed")),
+        "{:?}",
+        logged("bad")
+    );
+    let g = Fmu::new("bad2");
+    g.init();
+    assert_eq!(g.set(&[130], &[1.0]), fmi2Status_fmi2Error);
+    assert!(logged("bad2").iter().any(|m| m.contains("table.mass")));
+    let h = Fmu::new("bad3");
+    h.init();
+    assert_eq!(h.step(0.5, 0.01), fmi2Status_fmi2Error);
+    assert!(logged("bad3").iter().any(|m| m.contains("current time")));
+    unsafe {
+        assert_eq!(
+            fmi2GetReal(
+                std::ptr::null_mut(),
+                std::ptr::null(),
+                0,
+                std::ptr::null_mut()
+            ),
+            fmi2Status_fmi2Error
+        );
+        let n = CString::new("x").unwrap();
+        let guid = CString::new("{wrong}").unwrap();
+        let cb = fmi2CallbackFunctions {
+            logger: Some(fmi_sys::fmi2::logger::callback_logger_handler),
+            allocateMemory: None,
+            freeMemory: None,
+            stepFinished: None,
+            componentEnvironment: std::ptr::null_mut(),
+        };
+        assert!(fmi2Instantiate(
+            n.as_ptr(),
+            fmi2Type_fmi2CoSimulation,
+            guid.as_ptr(),
+            std::ptr::null(),
+            &cb,
+            0,
+            0
+        )
+        .is_null());
+        assert!(fmi2Instantiate(
+            n.as_ptr(),
+            fmi2Type_fmi2ModelExchange,
+            CString::new(GUID).unwrap().as_ptr(),
+            std::ptr::null(),
+            &cb,
+            0,
+            0
+        )
+        .is_null());
+    }
+}
+
+/// One FMI call with random arguments.
+#[derive(Debug, Clone)]
+enum Call {
+    Setup(f64),
+    Enter,
+    Exit,
+    SetReal(u32, f64),
+    SetInteger(u32, i32),
+    SetBoolean(u32, i32),
+    GetReal(u32),
+    Slope(u32, i32, f64),
+    Step(f64, f64),
+    GetState,
+    SetState,
+    Terminate,
+    Reset,
+    NullGet,
+}
+
+fn call() -> impl Strategy<Value = Call> {
+    let vr = prop_oneof![0u32..4, 10u32..18, 100u32..182, Just(9999u32)];
+    let x = prop_oneof![any::<f64>(), -1e3..1e3f64, Just(f64::NAN), Just(0.0)];
+    prop_oneof![
+        x.clone().prop_map(Call::Setup),
+        Just(Call::Enter),
+        Just(Call::Exit),
+        (vr.clone(), x.clone()).prop_map(|(v, x)| Call::SetReal(v, x)),
+        (vr.clone(), -2i32..5).prop_map(|(v, x)| Call::SetInteger(v, x)),
+        (vr.clone(), 0i32..2).prop_map(|(v, x)| Call::SetBoolean(v, x)),
+        vr.clone().prop_map(Call::GetReal),
+        (vr.clone(), 0i32..3, x.clone()).prop_map(|(v, o, x)| Call::Slope(v, o, x)),
+        (
+            prop_oneof![Just(0.0), -1.0..1.0f64],
+            prop_oneof![Just(1.0 / 512.0), -0.01..0.05f64, Just(f64::NAN)]
+        )
+            .prop_map(|(t, h)| Call::Step(t, h)),
+        Just(Call::GetState),
+        Just(Call::SetState),
+        Just(Call::Terminate),
+        Just(Call::Reset),
+        Just(Call::NullGet),
+    ]
+}
+
+proptest! {
+    #![proptest_config(ProptestConfig { cases: 64, .. ProptestConfig::default() })]
+    #[test]
+    fn random_call_sequences_never_crash(calls in proptest::collection::vec(call(), 1..40), id in 0u64..u64::MAX) {
+        let name = format!("prop{id}");
+        let f = Fmu::new(&name);
+        let mut state: fmi2FMUstate = std::ptr::null_mut();
+        let mut time = 0.0;
+        let mut errors = 0usize;
+        for c in &calls {
+            let s = unsafe {
+                match c {
+                    Call::Setup(t) => fmi2SetupExperiment(f.c, 0, 0.0, *t, 0, 0.0),
+                    Call::Enter => fmi2EnterInitializationMode(f.c),
+                    Call::Exit => fmi2ExitInitializationMode(f.c),
+                    Call::SetReal(v, x) => fmi2SetReal(f.c, v, 1, x),
+                    Call::SetInteger(v, x) => fmi2SetInteger(f.c, v, 1, x),
+                    Call::SetBoolean(v, x) => fmi2SetBoolean(f.c, v, 1, x),
+                    Call::GetReal(v) => { let mut y = 0.0; fmi2GetReal(f.c, v, 1, &mut y) }
+                    Call::Slope(v, o, x) => fmi2SetRealInputDerivatives(f.c, v, 1, o, x),
+                    Call::Step(dt, h) => {
+                        // mostly at the current time, sometimes off it
+                        let t = if *dt == 0.0 { time } else { time + dt };
+                        let s = fmi2DoStep(f.c, t, *h, 1);
+                        if s == 0 { time = t + h; }
+                        s
+                    }
+                    Call::GetState => fmi2GetFMUstate(f.c, &mut state),
+                    Call::SetState => if state.is_null() { 0 } else { fmi2SetFMUstate(f.c, state) },
+                    Call::Terminate => fmi2Terminate(f.c),
+                    Call::Reset => { time = 0.0; fmi2Reset(f.c) }
+                    Call::NullGet => fmi2GetReal(f.c, std::ptr::null(), 2, std::ptr::null_mut()),
+                }
+            };
+            prop_assert!(s == fmi2Status_fmi2OK || s == fmi2Status_fmi2Error || s == fmi2Status_fmi2Discard, "{c:?} returned {s}");
+            if s == fmi2Status_fmi2Error {
+                errors += 1;
+            }
+            if let Call::Setup(t) = c { if s == 0 { time = *t; } }
+            if matches!(c, Call::SetState) && s == 0 {
+                let mut t = 0.0;
+                unsafe { fmi2GetRealStatus(f.c, fmi2StatusKind_fmi2LastSuccessfulTime, &mut t) };
+                time = t;
+            }
+        }
+        let msgs = logged(&name);
+        prop_assert!(msgs.len() >= errors, "{errors} errors but {} messages", msgs.len());
+        unsafe { fmi2FreeFMUstate(f.c, &mut state) };
+    }
+}
