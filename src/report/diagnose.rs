@@ -1,9 +1,287 @@
-//! The diagnosis report (filled in below).
+//! The diagnosis report: the baseline's residual per test and channel against the noise
+//! floor (a heat-map table), every candidate with its parameters and held-out residual,
+//! the chosen cause, and before/after overlays of the worst tests and of the table TF.
+
 use crate::campaign::Campaign;
-use crate::diagnose::Diagnosis;
+use crate::diagnose::{simulate_test, Diagnosis, Part, CHANNELS};
+use crate::identify::frf::{Welch, WelchOptions};
+use crate::report::plot::{bode_png, xy_png, BodeCurve, Series};
+use std::fmt::Write as _;
 use std::path::Path;
 
-pub fn write(dir: &Path, _c: &Campaign, _d: &Diagnosis) -> anyhow::Result<()> {
+/// Background colour of a residual ratio: white at the noise floor, red above 5x.
+fn heat(x: f64) -> String {
+    if !x.is_finite() {
+        return "#eee".into();
+    }
+    let t = ((x - 1.0) / 4.0).clamp(0.0, 1.0);
+    let g = (255.0 * (1.0 - 0.75 * t)) as u8;
+    format!("rgb(255,{g},{g})")
+}
+
+fn measured_channel(r: &crate::campaign::Record, ch: usize) -> Option<&[f64]> {
+    match ch {
+        0 => Some(&r.displacement_m),
+        1 => Some(&r.acceleration_m_s2),
+        2 => Some(&r.force_n),
+        3 => r.spool_position.as_deref(),
+        _ => Some(&r.valve_command),
+    }
+}
+
+fn sim_channel(o: &crate::Outputs, ch: usize) -> f64 {
+    match ch {
+        0 => o.displacement_m,
+        1 => o.acceleration_m_s2,
+        2 => o.actuator_force_n,
+        3 => o.spool_position,
+        _ => o.valve_command,
+    }
+}
+
+/// Write index.html, README.md and the figures into `dir`.
+pub fn write(dir: &Path, c: &Campaign, d: &Diagnosis) -> anyhow::Result<()> {
     std::fs::create_dir_all(dir)?;
+    let j = d.to_json();
+    let cause = j["cause"].as_str().unwrap_or("none").to_string();
+    let mut figures: Vec<(String, String)> = Vec::new();
+    // the worst tests of the baseline: the largest residual ratio
+    let mut worst: Vec<(usize, usize, f64)> = d
+        .baseline_rows
+        .iter()
+        .enumerate()
+        .flat_map(|(i, (_, r))| r.iter().enumerate().map(move |(ch, x)| (i, ch, *x)))
+        .filter(|x| x.2.is_finite())
+        .collect();
+    worst.sort_by(|a, b| b.2.total_cmp(&a.2));
+    let mut shown = Vec::new();
+    for (i, ch, ratio) in worst {
+        if shown.len() >= 3 || shown.iter().any(|(t, _)| *t == i) {
+            continue;
+        }
+        shown.push((i, ch));
+        let r = &c.records[i];
+        let base = simulate_test(&d.baseline, c, i, Part::Whole);
+        let ext = simulate_test(&d.extended, c, i, Part::Whole);
+        let Some(m) = measured_channel(r, ch) else {
+            continue;
+        };
+        // a 1.5 s window around the largest baseline residual
+        let k = (0..m.len())
+            .max_by(|&a, &b| {
+                (m[a] - sim_channel(&base[a], ch))
+                    .abs()
+                    .total_cmp(&(m[b] - sim_channel(&base[b], ch)).abs())
+            })
+            .unwrap_or(0);
+        let half = (0.75 * c.info.sample_rate_hz) as usize;
+        let (lo, hi) = (k.saturating_sub(half), (k + half).min(m.len()));
+        let t: Vec<f64> = r.time_s[lo..hi].to_vec();
+        let meas: Vec<f64> = m[lo..hi].to_vec();
+        let b: Vec<f64> = base[lo..hi].iter().map(|o| sim_channel(o, ch)).collect();
+        let e: Vec<f64> = ext[lo..hi].iter().map(|o| sim_channel(o, ch)).collect();
+        let name = &c.info.tests[i].name;
+        let file = format!("time_{name}_{}.png", CHANNELS[ch]);
+        let ext_label = format!("extended ({cause})");
+        xy_png(
+            &dir.join(&file),
+            &format!(
+                "{name}: {} (baseline residual {ratio:.1} x noise)",
+                CHANNELS[ch]
+            ),
+            "time (s)",
+            CHANNELS[ch],
+            &[
+                Series {
+                    label: "measured",
+                    x: &t,
+                    y: &meas,
+                    points: false,
+                },
+                Series {
+                    label: "baseline",
+                    x: &t,
+                    y: &b,
+                    points: false,
+                },
+                Series {
+                    label: &ext_label,
+                    x: &t,
+                    y: &e,
+                    points: false,
+                },
+            ],
+        )?;
+        figures.push((
+            format!("{name}, {}: measured vs baseline vs extended", CHANNELS[ch]),
+            file,
+        ));
+    }
+    // the table TF of R2 (or the first random test): measured, baseline, extended
+    if let Some(i) = c
+        .info
+        .tests
+        .iter()
+        .position(|t| t.kind == crate::campaign::TestKind::Random && t.name != "R1")
+    {
+        let r = &c.records[i];
+        let fs = c.info.sample_rate_hz;
+        if let Ok(w) = Welch::new(
+            fs,
+            WelchOptions::for_resolution(fs, 0.25).fit_to(r.len(), 8),
+        ) {
+            let est = |acc: &[f64]| w.frf(&r.ref_acceleration_m_s2, acc).ok();
+            let base: Vec<f64> = simulate_test(&d.baseline, c, i, Part::Whole)
+                .iter()
+                .map(|o| o.acceleration_m_s2)
+                .collect();
+            let ext: Vec<f64> = simulate_test(&d.extended, c, i, Part::Whole)
+                .iter()
+                .map(|o| o.acceleration_m_s2)
+                .collect();
+            if let (Some(m), Some(b), Some(e)) = (est(&r.acceleration_m_s2), est(&base), est(&ext))
+            {
+                let ext_label = format!("extended ({cause})");
+                bode_png(
+                    &dir.join("table_tf.png"),
+                    &format!(
+                        "Table TF of {}: measured, baseline, extended",
+                        c.info.tests[i].name
+                    ),
+                    "gain (-)",
+                    &[
+                        BodeCurve {
+                            label: "measured",
+                            frequency_hz: &m.frequency_hz,
+                            response: &m.h1,
+                        },
+                        BodeCurve {
+                            label: "baseline",
+                            frequency_hz: &b.frequency_hz,
+                            response: &b.h1,
+                        },
+                        BodeCurve {
+                            label: &ext_label,
+                            frequency_hz: &e.frequency_hz,
+                            response: &e.h1,
+                        },
+                    ],
+                    1.0,
+                    40.0,
+                )?;
+                figures.push(("Table TF before and after".into(), "table_tf.png".into()));
+            }
+        }
+    }
+    // pages
+    let mut html = String::from(
+        "<!DOCTYPE html><html><head><meta charset=\"utf-8\"><title>Diagnosis</title><style>\
+         body{font-family:sans-serif;max-width:1100px;margin:auto}table{border-collapse:collapse}\
+         td,th{border:1px solid #ccc;padding:3px 8px;text-align:right}td:first-child{text-align:left}\
+         img{max-width:100%}</style></head><body>",
+    );
+    let mut md = String::new();
+    let _ = write!(
+        html,
+        "<h1>Diagnosis of {}</h1><p><b>Cause: {cause}</b>, gain {:.2} on held-out data, explained: {}.</p>\
+         <p>Baseline: servovalve {}, actuator {} (chosen by output error: cost {:.4e} ideal, {:.4e} nonlinear); \
+         noise floor from {}: displacement {:.3e} m, acceleration {:.3e} m/s^2, force {:.1} N, spool {:.3e}, \
+         valve command {:.3e}.</p><p>Rule: {}</p>",
+        c.info.name,
+        d.gain,
+        d.explained,
+        d.valve_model.name(),
+        d.actuator_model.name(),
+        d.actuator_costs[0],
+        d.actuator_costs[1],
+        d.noise.method,
+        d.noise.displacement_m,
+        d.noise.acceleration_m_s2,
+        d.noise.force_n,
+        d.noise.spool,
+        d.noise.valve_command,
+        j["rule"].as_str().unwrap_or("")
+    );
+    let _ = writeln!(
+        md,
+        "# Diagnosis of `{}`\n\n**Cause: {cause}**, gain {:.2}, explained: {}\n",
+        c.info.name, d.gain, d.explained
+    );
+    html.push_str(
+        "<h2>What the baseline gets wrong: residual RMS / noise RMS</h2><table><tr><th>test</th>",
+    );
+    md.push_str("## Baseline residual / noise RMS\n\n| test |");
+    for ch in CHANNELS {
+        let _ = write!(html, "<th>{ch}</th>");
+        let _ = write!(md, " {ch} |");
+    }
+    html.push_str("</tr>");
+    md.push_str("\n|---|---|---|---|---|---|\n");
+    for (name, r) in &d.baseline_rows {
+        let _ = write!(html, "<tr><td>{name}</td>");
+        let _ = write!(md, "| {name} |");
+        for x in r {
+            let _ = write!(
+                html,
+                "<td style=\"background:{}\">{}</td>",
+                heat(*x),
+                if x.is_finite() {
+                    format!("{x:.2}")
+                } else {
+                    "-".into()
+                }
+            );
+            let _ = write!(
+                md,
+                " {} |",
+                if x.is_finite() {
+                    format!("{x:.2}")
+                } else {
+                    "-".into()
+                }
+            );
+        }
+        html.push_str("</tr>");
+        md.push('\n');
+    }
+    html.push_str("</table><h2>Candidates</h2><table><tr><th>effect</th><th>parameters</th><th>held-out residual</th><th>score</th></tr>");
+    md.push_str("\n## Candidates\n\n| effect | parameters | held-out residual | score |\n|---|---|---|---|\n");
+    let _ = write!(
+        html,
+        "<tr><td>baseline</td><td></td><td>{:.3}</td><td></td></tr>",
+        d.baseline_heldout
+    );
+    for cand in &d.candidates {
+        let ps: Vec<String> = cand
+            .parameters
+            .iter()
+            .map(|(k, v)| format!("{k} = {v:.5}"))
+            .collect();
+        let _ = write!(
+            html,
+            "<tr><td>{}</td><td style=\"text-align:left\">{}</td><td>{:.3}</td><td>{:.3}</td></tr>",
+            cand.effect.name(),
+            ps.join(", "),
+            cand.heldout_residual,
+            cand.score
+        );
+        let _ = writeln!(
+            md,
+            "| {} | {} | {:.3} | {:.3} |",
+            cand.effect.name(),
+            ps.join(", "),
+            cand.heldout_residual,
+            cand.score
+        );
+    }
+    html.push_str("</table><h2>Before and after</h2>");
+    md.push_str("\n## Before and after\n\n");
+    for (title, file) in &figures {
+        let _ = write!(html, "<h3>{title}</h3><img src=\"{file}\">");
+        let _ = write!(md, "### {title}\n\n![{title}]({file})\n\n");
+    }
+    html.push_str("</body></html>\n");
+    std::fs::write(dir.join("index.html"), html)?;
+    std::fs::write(dir.join("README.md"), md)?;
     Ok(())
 }

@@ -467,6 +467,33 @@ pub fn write(
                 },
             ],
         )?;
+        xy_png(
+            &dir.join("friction_velocity.png"),
+            "Dissipative force vs velocity (Figure 9)",
+            "velocity (m/s)",
+            "F_D (N)",
+            &[
+                Series {
+                    label: "F_A - M a - k x (eq. 4.13)",
+                    x: &fr.velocity_m_s,
+                    y: &fr.dissipative_force_n,
+                    points: true,
+                },
+                Series {
+                    label: "Bouc-Wen fit",
+                    x: &fr.velocity_m_s,
+                    y: &fr.fitted_force_n,
+                    points: true,
+                },
+            ],
+        )?;
+        sections.push((
+            "Friction vs velocity (4.2.3)".into(),
+            "friction_velocity.png".into(),
+            "The same dissipative force against the table velocity: a viscoplastic (Bouc-Wen) force \
+             saturates at F_mu once the table slides, with no viscous slope."
+                .into(),
+        ));
         sections.push((
             "Friction (4.2.3)".into(),
             "friction.png".into(),

@@ -75,7 +75,7 @@ pub fn run(args: Args) -> anyhow::Result<()> {
         println!("  {name:4} {}", cells.join(" "));
     }
     println!(
-        "held-out tests: {}; baseline held-out residual {:.3}",
+        "held out: the second half of every test ({}); baseline residual on the missed cells {:.3}",
         d.heldout_tests.join(", "),
         d.baseline_heldout
     );
