@@ -3,7 +3,7 @@
 //! whole paper campaign synthesis.
 
 use crate::campaign::synth::{self, SynthOptions};
-use crate::model::{Inputs, Reference};
+use crate::model::Inputs;
 use crate::params::{ActuatorModel, Params};
 use crate::solver::{simulate_record, DEFAULT_MAX_SUBSTEP_S};
 use crate::Model;
@@ -31,16 +31,7 @@ pub fn random_inputs(seconds: f64) -> Vec<Inputs> {
         .expect("the paper program has R2");
     let r = synth::reference(&spec, 1, 1, seconds, synth::SAMPLE_RATE_HZ)
         .expect("R2 of the paper program is a valid test");
-    (0..r.len())
-        .map(|k| Inputs {
-            reference: Reference {
-                displacement_m: r.displacement_m[k],
-                velocity_m_s: r.velocity_m_s[k],
-                acceleration_m_s2: r.acceleration_m_s2[k],
-            },
-            external_force_n: 0.0,
-        })
-        .collect()
+    r.inputs()
 }
 
 /// One line of the benchmark table.

@@ -297,6 +297,20 @@ impl ReferenceSignal {
         }
     }
 
+    /// The model inputs at every sample (no external force).
+    pub fn inputs(&self) -> Vec<Inputs> {
+        (0..self.len())
+            .map(|k| Inputs {
+                reference: Reference {
+                    displacement_m: self.displacement_m[k],
+                    velocity_m_s: self.velocity_m_s[k],
+                    acceleration_m_s2: self.acceleration_m_s2[k],
+                },
+                external_force_n: 0.0,
+            })
+            .collect()
+    }
+
     pub fn len(&self) -> usize {
         self.displacement_m.len()
     }
@@ -588,16 +602,7 @@ pub fn synthesise_test(
     let fs = sample_rate_hz;
     let r = reference(spec, index, opts.seed, opts.random_duration_s, fs)?;
     let n = r.len();
-    let inputs: Vec<Inputs> = (0..n)
-        .map(|k| Inputs {
-            reference: Reference {
-                displacement_m: r.displacement_m[k],
-                velocity_m_s: r.velocity_m_s[k],
-                acceleration_m_s2: r.acceleration_m_s2[k],
-            },
-            external_force_n: 0.0,
-        })
-        .collect();
+    let inputs = r.inputs();
     // sensor noise: white, seeded per test, drawn in a fixed order per sample
     let mut rng = ChaCha8Rng::seed_from_u64(opts.seed);
     rng.set_stream(2 * index as u64 + 1);

@@ -307,7 +307,8 @@ pub fn simulate_test(p: &Params, c: &Campaign, i: usize, part: Part) -> Vec<Outp
     )
 }
 
-fn measured(r: &Record, ch: usize) -> Option<&[f64]> {
+/// Channel `ch` of [`CHANNELS`] in a record (None when the record lacks it).
+pub fn measured(r: &Record, ch: usize) -> Option<&[f64]> {
     match ch {
         0 => Some(&r.displacement_m),
         1 => Some(&r.acceleration_m_s2),
@@ -317,7 +318,8 @@ fn measured(r: &Record, ch: usize) -> Option<&[f64]> {
     }
 }
 
-fn simulated(o: &Outputs, ch: usize) -> f64 {
+/// Channel `ch` of [`CHANNELS`] in simulated readings.
+pub fn simulated(o: &Outputs, ch: usize) -> f64 {
     match ch {
         0 => o.displacement_m,
         1 => o.acceleration_m_s2,
@@ -348,7 +350,7 @@ fn ratios(r: &Record, sim: &[Outputs], noise: &NoiseFloor, part: Part) -> [f64; 
 
 /// Normalised residual samples of the fitting halves of `tests` for least squares (every
 /// `step`-th sample, scaled so that the cost is the mean squared ratio per test and channel).
-fn residual_vector(
+pub fn residual_vector(
     p: &Params,
     c: &Campaign,
     tests: &[usize],
@@ -515,7 +517,10 @@ fn starts(effect: Effect, c: &Campaign, base: &Params) -> Vec<Vec<f64>> {
         Effect::Foundation => {
             // the FRF guess and a spread over the plausible band, screened by the caller
             let mut g = Vec::new();
-            for f in foundation_frequency(c).into_iter().chain([8.0, 15.0, 25.0, 40.0]) {
+            for f in foundation_frequency(c)
+                .into_iter()
+                .chain([8.0, 15.0, 25.0, 40.0])
+            {
                 for r in [3.0, 20.0] {
                     g.push(vec![r * m, f, 0.05]);
                 }
@@ -676,7 +681,12 @@ pub fn diagnose(c: &Campaign, progress: Option<Progress>) -> Diagnosis {
         let v: Vec<f64> = rows
             .iter()
             .zip(&missed)
-            .flat_map(|(r, m)| r.iter().zip(m).filter(|(_, &m)| m || !any_missed).map(|(x, _)| *x))
+            .flat_map(|(r, m)| {
+                r.iter()
+                    .zip(m)
+                    .filter(|(_, &m)| m || !any_missed)
+                    .map(|(x, _)| *x)
+            })
             .filter(|x| x.is_finite())
             .collect();
         (v.iter().map(|x| x * x).sum::<f64>() / v.len().max(1) as f64).sqrt()
@@ -715,9 +725,7 @@ pub fn diagnose(c: &Campaign, progress: Option<Progress>) -> Diagnosis {
         .min_by(|a, b| a.score.total_cmp(&b.score))
         .cloned();
     let (cause, extended, ext_resid) = match &best {
-        Some(b)
-            if any_missed && baseline_heldout / b.heldout_residual >= REQUIRED_GAIN =>
-        {
+        Some(b) if any_missed && baseline_heldout / b.heldout_residual >= REQUIRED_GAIN => {
             (Some(b.effect), b.params, b.heldout_residual)
         }
         _ => (None, base, baseline_heldout),
@@ -807,6 +815,17 @@ fn fit_candidate(
                 // the identified mass holds the specimen's mass at low frequency
                 bt[0] = (bt[0] - s[0]).max(0.3 * bt[0]);
             }
+            if e == Effect::Foundation {
+                // the identified oil column is the oil and the foundation springs in
+                // series: 1/k_id = 1/k_oil + 1/k_f, so the oil alone is stiffer
+                let a = &b.actuator;
+                let k_id =
+                    4.0 * a.bulk_modulus_pa * a.piston_area_m2.powi(2) / a.total_oil_volume_m3;
+                let k_f = s[0] * (2.0 * std::f64::consts::PI * s[1]).powi(2);
+                if k_f > 1.5 * k_id {
+                    bt[1] *= k_f / (k_f - k_id);
+                }
+            }
             let t0: Vec<f64> = s
                 .iter()
                 .copied()
@@ -833,6 +852,27 @@ fn fit_candidate(
             .map(|x| x.abs().max(1e-4))
             .chain(free.iter().map(|&j| bscale[j]))
             .collect();
+        // stage 1: the free baseline parameters with the effect held at its start (the
+        // baseline has bent to absorb the effect; unbent, the joint fit starts downhill)
+        let t0 = {
+            let eff = t0[..ne].to_vec();
+            let aligned = minimise(
+                |tb| {
+                    let t: Vec<f64> = eff.iter().chain(tb).copied().collect();
+                    residual_vector(&assemble(&t, &fixed), c, &sig, noise, step)
+                },
+                &t0[ne..],
+                &lo[ne..],
+                &hi[ne..],
+                &scale[ne..],
+                opts,
+            );
+            match aligned {
+                Some(f) => eff.into_iter().chain(f.theta).collect(),
+                None => t0,
+            }
+        };
+        // stage 2: everything together
         if let Some(f) = minimise(
             |t| residual_vector(&assemble(t, &fixed), c, &sig, noise, step),
             &t0,

@@ -3,7 +3,7 @@
 //! the chosen cause, and before/after overlays of the worst tests and of the table TF.
 
 use crate::campaign::Campaign;
-use crate::diagnose::{simulate_test, Diagnosis, Part, CHANNELS};
+use crate::diagnose::{measured, simulate_test, simulated, Diagnosis, Part, CHANNELS};
 use crate::identify::frf::{Welch, WelchOptions};
 use crate::report::plot::{bode_png, xy_png, BodeCurve, Series};
 use std::fmt::Write as _;
@@ -17,26 +17,6 @@ fn heat(x: f64) -> String {
     let t = ((x - 1.0) / 4.0).clamp(0.0, 1.0);
     let g = (255.0 * (1.0 - 0.75 * t)) as u8;
     format!("rgb(255,{g},{g})")
-}
-
-fn measured_channel(r: &crate::campaign::Record, ch: usize) -> Option<&[f64]> {
-    match ch {
-        0 => Some(&r.displacement_m),
-        1 => Some(&r.acceleration_m_s2),
-        2 => Some(&r.force_n),
-        3 => r.spool_position.as_deref(),
-        _ => Some(&r.valve_command),
-    }
-}
-
-fn sim_channel(o: &crate::Outputs, ch: usize) -> f64 {
-    match ch {
-        0 => o.displacement_m,
-        1 => o.acceleration_m_s2,
-        2 => o.actuator_force_n,
-        3 => o.spool_position,
-        _ => o.valve_command,
-    }
 }
 
 /// Write index.html, README.md and the figures into `dir`.
@@ -63,23 +43,23 @@ pub fn write(dir: &Path, c: &Campaign, d: &Diagnosis) -> anyhow::Result<()> {
         let r = &c.records[i];
         let base = simulate_test(&d.baseline, c, i, Part::Whole);
         let ext = simulate_test(&d.extended, c, i, Part::Whole);
-        let Some(m) = measured_channel(r, ch) else {
+        let Some(m) = measured(r, ch) else {
             continue;
         };
         // a 1.5 s window around the largest baseline residual
         let k = (0..m.len())
             .max_by(|&a, &b| {
-                (m[a] - sim_channel(&base[a], ch))
+                (m[a] - simulated(&base[a], ch))
                     .abs()
-                    .total_cmp(&(m[b] - sim_channel(&base[b], ch)).abs())
+                    .total_cmp(&(m[b] - simulated(&base[b], ch)).abs())
             })
             .unwrap_or(0);
         let half = (0.75 * c.info.sample_rate_hz) as usize;
         let (lo, hi) = (k.saturating_sub(half), (k + half).min(m.len()));
         let t: Vec<f64> = r.time_s[lo..hi].to_vec();
         let meas: Vec<f64> = m[lo..hi].to_vec();
-        let b: Vec<f64> = base[lo..hi].iter().map(|o| sim_channel(o, ch)).collect();
-        let e: Vec<f64> = ext[lo..hi].iter().map(|o| sim_channel(o, ch)).collect();
+        let b: Vec<f64> = base[lo..hi].iter().map(|o| simulated(o, ch)).collect();
+        let e: Vec<f64> = ext[lo..hi].iter().map(|o| simulated(o, ch)).collect();
         let name = &c.info.tests[i].name;
         let file = format!("time_{name}_{}.png", CHANNELS[ch]);
         let ext_label = format!("extended ({cause})");

@@ -27,14 +27,5 @@ pub fn sine(amplitude_m: f64, frequency_hz: f64, seconds: f64) -> Vec<Inputs> {
 
 /// The model inputs of a synthesised reference.
 pub fn inputs_of(r: &ReferenceSignal) -> Vec<Inputs> {
-    (0..r.displacement_m.len())
-        .map(|k| Inputs {
-            reference: Reference {
-                displacement_m: r.displacement_m[k],
-                velocity_m_s: r.velocity_m_s[k],
-                acceleration_m_s2: r.acceleration_m_s2[k],
-            },
-            external_force_n: 0.0,
-        })
-        .collect()
+    r.inputs()
 }
