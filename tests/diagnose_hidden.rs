@@ -28,15 +28,28 @@ fn draw(effect: &str, rng: &mut ChaCha8Rng, p: &Params) -> (String, f64) {
     match effect {
         "specimen" => {
             let (m, f, z) = (u(rng, 3e3, 40e3), u(rng, 2.0, 15.0), u(rng, 0.01, 0.08));
-            (format!("specimen:mass_kg={m},frequency_hz={f},damping_ratio={z}"), f)
+            (
+                format!("specimen:mass_kg={m},frequency_hz={f},damping_ratio={z}"),
+                f,
+            )
         }
         "foundation" => {
             let (m, f, z) = (u(rng, 1e5, 2e6), u(rng, 6.0, 40.0), u(rng, 0.01, 0.10));
-            (format!("foundation:mass_kg={m},frequency_hz={f},damping_ratio={z}"), f)
+            (
+                format!("foundation:mass_kg={m},frequency_hz={f},damping_ratio={z}"),
+                f,
+            )
         }
         "flow_saturation" => {
             let q = u(rng, 0.40, 0.85) * largest_sine_flow(p);
             (format!("flow_saturation:max_flow_m3_s={q}"), q)
+        }
+        "stick_slip" => {
+            let (r, v) = (u(rng, 1.5, 3.5), u(rng, 0.001, 0.010));
+            (
+                format!("stick_slip:static_ratio={r},stribeck_velocity_m_s={v}"),
+                r,
+            )
         }
         "valve_deadband" => {
             let d = u(rng, 0.005, 0.05);
@@ -57,7 +70,9 @@ fn visible(base: &Params, with: &Params) -> bool {
     let a = synthesise(base, &opts, None);
     let b = synthesise(with, &opts, None);
     let n = NoiseLevels::default();
-    let rms = |x: &[f64], y: &[f64]| (x.iter().zip(y).map(|(p, q)| (p - q).powi(2)).sum::<f64>() / x.len() as f64).sqrt();
+    let rms = |x: &[f64], y: &[f64]| {
+        (x.iter().zip(y).map(|(p, q)| (p - q).powi(2)).sum::<f64>() / x.len() as f64).sqrt()
+    };
     a.records.iter().zip(&b.records).any(|(x, y)| {
         rms(&x.displacement_m, &y.displacement_m) > 5.0 * n.displacement_m
             || rms(&x.acceleration_m_s2, &y.acceleration_m_s2) > 5.0 * n.acceleration_m_s2
@@ -88,10 +103,17 @@ fn run_case(base: &Params, effect: Option<&str>, seed: u64) -> (Outcome, Option<
     let dir = tmp.path().join("campaign");
     let params = tmp.path().join("truth_base.toml");
     std::fs::write(&params, base.to_toml_string()).unwrap();
-    let mut args: Vec<String> = ["campaign", "synth", "--quiet", "--random-duration", "30", "--seed"]
-        .iter()
-        .map(|s| s.to_string())
-        .collect();
+    let mut args: Vec<String> = [
+        "campaign",
+        "synth",
+        "--quiet",
+        "--random-duration",
+        "30",
+        "--seed",
+    ]
+    .iter()
+    .map(|s| s.to_string())
+    .collect();
     args.push(seed.to_string());
     args.push("--params".into());
     args.push(params.to_str().unwrap().into());
@@ -105,11 +127,18 @@ fn run_case(base: &Params, effect: Option<&str>, seed: u64) -> (Outcome, Option<
     assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
     let json = tmp.path().join("diagnosis.json");
     let o = Command::new(bin)
-        .args(["diagnose", "--quiet", dir.to_str().unwrap(), "--json", json.to_str().unwrap()])
+        .args([
+            "diagnose",
+            "--quiet",
+            dir.to_str().unwrap(),
+            "--json",
+            json.to_str().unwrap(),
+        ])
         .output()
         .unwrap();
     assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
-    let v: serde_json::Value = serde_json::from_str(&std::fs::read_to_string(&json).unwrap()).unwrap();
+    let v: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(&json).unwrap()).unwrap();
     let out = Outcome {
         cause: v["cause"].as_str().unwrap().to_string(),
         parameters: v["parameters"].clone(),
@@ -122,9 +151,15 @@ fn check(base: &Params, effect: &str, key: &str, tol: f64, seed: u64) {
     let (o, truth, spec) = run_case(base, Some(effect), seed);
     let got = o.parameters[key].as_f64().unwrap_or(f64::NAN);
     let truth = truth.unwrap();
-    eprintln!("{spec} (seed {seed}): cause {} {key} {got} (truth {truth}), gain {:.2}", o.cause, o.gain);
+    eprintln!(
+        "{spec} (seed {seed}): cause {} {key} {got} (truth {truth}), gain {:.2}",
+        o.cause, o.gain
+    );
     assert_eq!(o.cause, effect, "{spec} (seed {seed})");
-    assert!((got / truth - 1.0).abs() < tol, "{spec}: {key} {got} vs {truth}");
+    assert!(
+        (got / truth - 1.0).abs() < tol,
+        "{spec}: {key} {got} vs {truth}"
+    );
     assert!(o.gain >= 1.5, "{spec}: gain {}", o.gain);
 }
 
@@ -139,20 +174,77 @@ fn finds_a_specimen() {
 #[test]
 #[ignore = "known limitation: stiff (> 30 Hz) foundations are missed; see the issue notes"]
 fn finds_a_foundation() {
-    check(&Params::trees_lab(), "foundation", "frequency_hz", 0.10, 201);
-    check(&Params::trees_lab(), "foundation", "frequency_hz", 0.10, 202);
+    check(
+        &Params::trees_lab(),
+        "foundation",
+        "frequency_hz",
+        0.10,
+        201,
+    );
+    check(
+        &Params::trees_lab(),
+        "foundation",
+        "frequency_hz",
+        0.10,
+        202,
+    );
+}
+
+/// Known limitation (issue 6 stays open): stick-slip makes the loop chatter on the
+/// in-loop sensor noise, which a noise-free simulation cannot match sample by sample.
+#[test]
+#[ignore = "known limitation: stick-slip chatter is noise-driven; see the issue notes"]
+fn finds_stick_slip() {
+    check(
+        &Params::trees_lab(),
+        "stick_slip",
+        "static_ratio",
+        0.25,
+        301,
+    );
+    check(
+        &Params::trees_lab(),
+        "stick_slip",
+        "static_ratio",
+        0.25,
+        302,
+    );
 }
 
 #[test]
 fn finds_flow_saturation() {
-    check(&Params::trees_lab(), "flow_saturation", "max_flow_m3_s", 0.10, 401);
-    check(&Params::trees_lab(), "flow_saturation", "max_flow_m3_s", 0.10, 402);
+    check(
+        &Params::trees_lab(),
+        "flow_saturation",
+        "max_flow_m3_s",
+        0.10,
+        401,
+    );
+    check(
+        &Params::trees_lab(),
+        "flow_saturation",
+        "max_flow_m3_s",
+        0.10,
+        402,
+    );
 }
 
 #[test]
 fn finds_a_valve_deadband() {
-    check(&Params::trees_lab(), "valve_deadband", "deadband", 0.25, 501);
-    check(&Params::trees_lab(), "valve_deadband", "deadband", 0.25, 502);
+    check(
+        &Params::trees_lab(),
+        "valve_deadband",
+        "deadband",
+        0.25,
+        501,
+    );
+    check(
+        &Params::trees_lab(),
+        "valve_deadband",
+        "deadband",
+        0.25,
+        502,
+    );
 }
 
 /// First-order valve and nonlinear actuator as the truth's baseline.
