@@ -147,7 +147,25 @@ fn run_case(base: &Params, effect: Option<&str>, seed: u64) -> (Outcome, Option<
     (out, main, spec.unwrap_or_else(|| "none".into()))
 }
 
+/// The committed seed, or every seed of `SHAKETABLE_HIDDEN_SEEDS` (comma-separated) when
+/// set: vary the draws while developing, so the method is not tuned to the committed ones.
+fn seeds(committed: u64) -> Vec<u64> {
+    match std::env::var("SHAKETABLE_HIDDEN_SEEDS") {
+        Ok(v) => v
+            .split(',')
+            .filter_map(|s| s.trim().parse().ok())
+            .collect(),
+        Err(_) => vec![committed],
+    }
+}
+
 fn check(base: &Params, effect: &str, key: &str, tol: f64, seed: u64) {
+    for seed in seeds(seed) {
+        check_one(base, effect, key, tol, seed);
+    }
+}
+
+fn check_one(base: &Params, effect: &str, key: &str, tol: f64, seed: u64) {
     let (o, truth, spec) = run_case(base, Some(effect), seed);
     let got = o.parameters[key].as_f64().unwrap_or(f64::NAN);
     let truth = truth.unwrap();
@@ -190,10 +208,11 @@ fn finds_a_foundation() {
     );
 }
 
-/// Known limitation (issue 6 stays open): stick-slip makes the loop chatter on the
-/// in-loop sensor noise, which a noise-free simulation cannot match sample by sample.
+/// Stick-slip chatter grows out of the in-loop noise: scored by the predictive score
+/// (noise-driven runs), fitted by a grid. Known limitation (issue 6 stays open): weak,
+/// intermittent chatter (e.g. seed 303: r_s 1.75, v_s 7 mm/s) improves the score by only
+/// 1.19 and is named `none`.
 #[test]
-#[ignore = "known limitation: stick-slip chatter is noise-driven; see the issue notes"]
 fn finds_stick_slip() {
     check(
         &Params::trees_lab(),

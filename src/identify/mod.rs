@@ -10,6 +10,7 @@
 
 pub mod frf;
 pub mod lsq;
+pub mod spool;
 
 use crate::campaign::{Campaign, Record, TestSpec};
 use crate::linear::{Linearisation, OilColumn, TfFigures};

@@ -228,8 +228,8 @@ pub fn write(dir: &Path, c: &Campaign, d: &Diagnosis) -> anyhow::Result<()> {
     md.push_str("\n## Candidates\n\n| effect | parameters | held-out residual | score |\n|---|---|---|---|\n");
     let _ = write!(
         html,
-        "<tr><td>baseline</td><td></td><td>{:.3}</td><td></td></tr>",
-        d.baseline_heldout
+        "<tr><td>baseline</td><td></td><td>{:.3}</td><td>{:.3}</td></tr>",
+        d.baseline_heldout, d.baseline_score
     );
     for cand in &d.candidates {
         let ps: Vec<String> = cand

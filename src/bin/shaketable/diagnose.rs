@@ -79,7 +79,11 @@ pub fn run(args: Args) -> anyhow::Result<()> {
         d.heldout_tests.join(", "),
         d.baseline_heldout
     );
-    println!("candidates (held-out residual, parameters):");
+    println!(
+        "baseline predictive score on the missed cells {:.3}",
+        d.baseline_score
+    );
+    println!("candidates (held-out residual, score, parameters):");
     for c in &d.candidates {
         let ps: Vec<String> = c
             .parameters
@@ -87,9 +91,10 @@ pub fn run(args: Args) -> anyhow::Result<()> {
             .map(|(k, v)| format!("{k}={v:.5}"))
             .collect();
         println!(
-            "  {:16} {:8.3}  {}",
+            "  {:16} {:8.3} {:8.3}  {}",
             c.effect.name(),
             c.heldout_residual,
+            c.score,
             ps.join(", ")
         );
     }
