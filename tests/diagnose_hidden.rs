@@ -151,10 +151,7 @@ fn run_case(base: &Params, effect: Option<&str>, seed: u64) -> (Outcome, Option<
 /// set: vary the draws while developing, so the method is not tuned to the committed ones.
 fn seeds(committed: u64) -> Vec<u64> {
     match std::env::var("SHAKETABLE_HIDDEN_SEEDS") {
-        Ok(v) => v
-            .split(',')
-            .filter_map(|s| s.trim().parse().ok())
-            .collect(),
+        Ok(v) => v.split(',').filter_map(|s| s.trim().parse().ok()).collect(),
         Err(_) => vec![committed],
     }
 }

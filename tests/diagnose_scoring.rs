@@ -90,7 +90,10 @@ fn stick_slip_chatter_is_judged_by_its_spread_not_its_phase() {
     eprintln!("score: truth {t_score:.2}, baseline {b_score:.2}; sample-wise: truth {t_ratio:.2}, baseline {b_ratio:.2}");
     // sample by sample, the true model's chatter has the wrong phase: it does no better
     // than the baseline, which has none
-    assert!(t_ratio > 0.8 * b_ratio, "sample-wise {t_ratio} vs {b_ratio}");
+    assert!(
+        t_ratio > 0.8 * b_ratio,
+        "sample-wise {t_ratio} vs {b_ratio}"
+    );
     // under the predictive score the truth wins clearly
     assert!(b_score > 1.5 * t_score, "score {t_score} vs {b_score}");
 }

@@ -226,22 +226,17 @@ fn summary(rows: &[[f64; 5]]) -> f64 {
     (v.iter().map(|x| x * x).sum::<f64>() / v.len().max(1) as f64).sqrt()
 }
 
-/// The baseline parameters as a vector: `[M, beta, C_l, F_mu, Y, Ks, f_v, xi, tau]`;
-/// [`REFINED`] says which the output-error refinement frees. The valve (Ks and its
-/// dynamics) is refined before, on the spool channel alone
-/// ([`crate::identify::spool::refine_servovalve`]), where the flow effects cannot bend it.
+/// The baseline parameters refined by output error, as a vector: `[M, beta, C_l, F_mu, Y]`
+/// ([`REFINED`] says which are free). The valve is refined before, on the spool channel
+/// alone ([`crate::identify::spool::refine_servovalve`]), where the flow effects cannot
+/// bend it, and every base of the candidates carries that valve.
 fn baseline_theta(p: &Params) -> Vec<f64> {
-    let v = &p.servovalve;
     vec![
         p.table.mass_kg,
         p.actuator.bulk_modulus_pa,
         p.actuator.leakage_m3_s_pa,
         p.friction.force_n,
         p.friction.yield_displacement_m,
-        v.gain,
-        v.natural_frequency_hz,
-        v.damping_ratio,
-        v.time_constant_s,
     ]
 }
 
@@ -257,10 +252,6 @@ fn set_baseline(p: &mut Params, t: &[f64]) {
     p.actuator.leakage_m3_s_pa = t[2];
     p.friction.force_n = t[3];
     p.friction.yield_displacement_m = t[4];
-    p.servovalve.gain = t[5];
-    p.servovalve.natural_frequency_hz = t[6];
-    p.servovalve.damping_ratio = t[7];
-    p.servovalve.time_constant_s = t[8];
 }
 
 fn baseline_bounds(p: &Params) -> (Vec<f64>, Vec<f64>, Vec<f64>) {
@@ -457,8 +448,7 @@ pub fn diagnose(c: &Campaign, progress: Option<Progress>) -> Diagnosis {
     let noise = estimate_noise(c);
     let mut base = id.params;
     // the valve by output error on the spool channel (fitting halves)
-    let records: Vec<&crate::campaign::Record> = c.records.iter().collect();
-    if let Some(v) = refine_servovalve(&base.servovalve, &records, c.info.sample_rate_hz, |n| {
+    if let Some(v) = refine_servovalve(&base.servovalve, &c.records, c.info.sample_rate_hz, |n| {
         Part::Fit.range(n)
     }) {
         base.servovalve = v;
@@ -481,11 +471,10 @@ pub fn diagnose(c: &Campaign, progress: Option<Progress>) -> Diagnosis {
         b0.actuator.model = model;
         let (lo, hi, scale) = baseline_bounds(&b0);
         let all = baseline_theta(&b0);
-        let free = REFINED;
-        let pick = |v: &[f64]| -> Vec<f64> { free.iter().map(|&j| v[j]).collect() };
+        let pick = |v: &[f64]| -> Vec<f64> { REFINED.iter().map(|&j| v[j]).collect() };
         let full = |t: &[f64]| {
             let mut v = all.clone();
-            for (k, &j) in free.iter().enumerate() {
+            for (k, &j) in REFINED.iter().enumerate() {
                 v[j] = t[k];
             }
             v
@@ -651,7 +640,15 @@ fn fit_candidate(
     }
     if e == Effect::StickSlip {
         let (cost, theta, p) = fit_stick_slip(c, &bases[0], &sig, noise)?;
-        return Some(scored_candidate(e, c, &theta, cost.sqrt(), p, heldout_idx, noise));
+        return Some(scored_candidate(
+            e,
+            c,
+            &theta,
+            cost.sqrt(),
+            p,
+            heldout_idx,
+            noise,
+        ));
     }
     let ne = e.parameters().len();
     let free = &REFINED[..];
@@ -684,8 +681,6 @@ fn fit_candidate(
     for b in bases {
         for s in starts(e, c, b) {
             let mut bt = baseline_theta(b);
-            // the valve as refined on the spool, whichever base the start comes from
-            bt[5..].copy_from_slice(&baseline_theta(&bases[0])[5..]);
             if e == Effect::Specimen {
                 // the identified mass holds the specimen's mass at low frequency
                 bt[0] = (bt[0] - s[0]).max(0.3 * bt[0]);
@@ -763,7 +758,15 @@ fn fit_candidate(
     }
     let (cost, theta, fixed) = best?;
     let p = assemble(&theta, &fixed);
-    Some(scored_candidate(e, c, &theta[..ne], cost.sqrt(), p, heldout_idx, noise))
+    Some(scored_candidate(
+        e,
+        c,
+        &theta[..ne],
+        cost.sqrt(),
+        p,
+        heldout_idx,
+        noise,
+    ))
 }
 
 /// A fitted candidate scored on the held-out tests.

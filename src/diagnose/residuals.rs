@@ -89,7 +89,13 @@ impl NoiseFloor {
     /// loop's response, which the noisy run predicts).
     pub fn measurement(&self, ch: usize) -> f64 {
         let s = &self.sensor;
-        [s.displacement_m, s.acceleration_m_s2, s.force_n, s.spool, 0.0][ch]
+        [
+            s.displacement_m,
+            s.acceleration_m_s2,
+            s.force_n,
+            s.spool,
+            0.0,
+        ][ch]
     }
 
     /// Seeded sensor noise at the sensor levels for a record of `n` samples (the feedback
@@ -175,7 +181,13 @@ pub fn estimate_noise(c: &Campaign) -> NoiseFloor {
     // floors so that a noise-free record does not divide by zero
     let lower = [1e-9, 1e-6, 1e-3, 1e-7];
     let sensor: Vec<f64> = (0..4)
-        .map(|ch| if hf[ch].is_finite() { hf[ch].max(lower[ch]) } else { f64::NAN })
+        .map(|ch| {
+            if hf[ch].is_finite() {
+                hf[ch].max(lower[ch])
+            } else {
+                f64::NAN
+            }
+        })
         .collect();
     // the floor is never below the sensor noise
     let floor: Vec<f64> = (0..4)
@@ -188,10 +200,9 @@ pub fn estimate_noise(c: &Campaign) -> NoiseFloor {
         })
         .collect();
     let k = &c.info.controller;
-    let from_gains = ((k.kp * sensor[0]).powi(2)
-        + (k.ka * sensor[1]).powi(2)
-        + (k.kdp * sensor[2]).powi(2))
-    .sqrt();
+    let from_gains =
+        ((k.kp * sensor[0]).powi(2) + (k.ka * sensor[1]).powi(2) + (k.kdp * sensor[2]).powi(2))
+            .sqrt();
     let su = if have_rest && rest[4].is_finite() {
         rest[4].max(from_gains)
     } else {
@@ -395,7 +406,13 @@ pub fn scores(r: &Record, pred: &Prediction, noise: &NoiseFloor, part: Part) -> 
 }
 
 /// [`CellScores`] of `p` on test `i` over `part` (one [`predict`] and [`scores`]).
-pub fn test_scores(p: &Params, c: &Campaign, i: usize, part: Part, noise: &NoiseFloor) -> CellScores {
+pub fn test_scores(
+    p: &Params,
+    c: &Campaign,
+    i: usize,
+    part: Part,
+    noise: &NoiseFloor,
+) -> CellScores {
     let pred = predict(p, c, i, part.simulated(), noise);
     scores(&c.records[i], &pred, noise, part)
 }

@@ -21,8 +21,11 @@ const SUBSTEPS: usize = 4;
 /// first sample; the command is linearly interpolated between samples as the solver does
 /// with its inputs.
 pub fn spool_response(v: &Servovalve, u: &[f64], sample_rate_hz: f64) -> Vec<f64> {
-    let dt = 1.0 / sample_rate_hz;
     let n = u.len();
+    if n == 0 {
+        return Vec::new();
+    }
+    let dt = 1.0 / sample_rate_hz;
     let at = |t: f64| -> f64 {
         // the command at time t (seconds from the first sample), held beyond the ends
         let x = (t * sample_rate_hz).max(0.0);
@@ -33,9 +36,6 @@ pub fn spool_response(v: &Servovalve, u: &[f64], sample_rate_hz: f64) -> Vec<f64
         let w = x - k as f64;
         u[k] + (u[k + 1] - u[k]) * w
     };
-    if n == 0 {
-        return Vec::new();
-    }
     if v.model == ServovalveModel::Delay {
         return (0..n)
             .map(|k| {
@@ -61,8 +61,14 @@ pub fn spool_response(v: &Servovalve, u: &[f64], sample_rate_hz: f64) -> Vec<f64
         for i in 0..SUBSTEPS {
             let t = k as f64 * dt + i as f64 * h;
             let k1 = f(t, s);
-            let k2 = f(t + 0.5 * h, [s[0] + 0.5 * h * k1[0], s[1] + 0.5 * h * k1[1]]);
-            let k3 = f(t + 0.5 * h, [s[0] + 0.5 * h * k2[0], s[1] + 0.5 * h * k2[1]]);
+            let k2 = f(
+                t + 0.5 * h,
+                [s[0] + 0.5 * h * k1[0], s[1] + 0.5 * h * k1[1]],
+            );
+            let k3 = f(
+                t + 0.5 * h,
+                [s[0] + 0.5 * h * k2[0], s[1] + 0.5 * h * k2[1]],
+            );
             let k4 = f(t + h, [s[0] + h * k3[0], s[1] + h * k3[1]]);
             for j in 0..2 {
                 s[j] += h / 6.0 * (k1[j] + 2.0 * k2[j] + 2.0 * k3[j] + k4[j]);
@@ -98,7 +104,7 @@ fn with_theta(v: &Servovalve, t: &[f64]) -> Servovalve {
 /// record has one or the fit fails; the caller keeps the FRF estimate then.
 pub fn refine_servovalve(
     start: &Servovalve,
-    records: &[&Record],
+    records: &[Record],
     sample_rate_hz: f64,
     range: impl Fn(usize) -> std::ops::Range<usize> + Sync,
 ) -> Option<Servovalve> {
