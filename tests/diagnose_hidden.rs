@@ -184,10 +184,11 @@ fn finds_a_specimen() {
     check(&Params::trees_lab(), "specimen", "frequency_hz", 0.05, 102);
 }
 
-/// Known limitation (issue 6 stays open): a stiff foundation above ~30 Hz (seeds 201:
-/// 37.7 Hz, 602: 33.8 Hz) is named `none`; the candidate fit does not find the mode.
+/// Stiff foundations (seed 201: 590 t at 37.7 Hz) move the table by less than the LVDT
+/// noise; their mode shows in the 32-64 Hz octave of R1's force and acceleration, which
+/// the band-resolved score sees. The second draw is on the nonlinear actuator
+/// ([`finds_a_foundation_on_the_nonlinear_actuator`]).
 #[test]
-#[ignore = "known limitation: stiff (> 30 Hz) foundations are missed; see the issue notes"]
 fn finds_a_foundation() {
     check(
         &Params::trees_lab(),
@@ -196,6 +197,15 @@ fn finds_a_foundation() {
         0.10,
         201,
     );
+}
+
+/// Known limitation (issue 6 stays open): a heavy, lightly damped foundation at low
+/// frequency (seed 202: 1970 t, 10.7 Hz, 1.5 %) is missed. The baseline misses R1's force
+/// by 30 floor RMS, the FRF start places the mode within 4 %, but a sharp mode a few
+/// percent off misfits more than none, so the fit ends in a 23 Hz minimum.
+#[test]
+#[ignore = "known limitation: heavy lightly damped low-frequency foundations; see the issue notes"]
+fn finds_a_soft_lightly_damped_foundation() {
     check(
         &Params::trees_lab(),
         "foundation",
@@ -276,7 +286,6 @@ fn finds_effects_on_other_baselines() {
 
 /// The foundation on the nonlinear-actuator baseline (see [`finds_a_foundation`]).
 #[test]
-#[ignore = "known limitation: stiff (> 30 Hz) foundations are missed; see the issue notes"]
 fn finds_a_foundation_on_the_nonlinear_actuator() {
     let mut nonlinear = Params::trees_lab();
     nonlinear.actuator.model = shaketable::params::ActuatorModel::Nonlinear;

@@ -26,7 +26,14 @@ fn heldout(p: &Params, c: &shaketable::campaign::Campaign, sample_wise: bool) ->
         let row = if sample_wise {
             ratios(&c.records[i], &pred.locked, &noise, Part::HeldOut)
         } else {
-            scores(&c.records[i], &pred, &noise, Part::HeldOut).score
+            scores(
+                &c.records[i],
+                &pred,
+                &noise,
+                Part::HeldOut,
+                c.info.sample_rate_hz,
+            )
+            .score
         };
         v.extend(row.into_iter().filter(|x| x.is_finite()));
     }

@@ -76,8 +76,14 @@ where
         let column = |j: usize| -> Option<Vec<f64>> {
             let h = opts.step * theta[j].abs().max(scale[j]);
             let mut t = theta.to_vec();
-            // step inside the bounds
-            let h = if t[j] + h > upper[j] { -h } else { h };
+            // step inside the bounds; a parameter pinned by its bounds has no column
+            let h = if t[j] + h <= upper[j] {
+                h
+            } else if t[j] - h >= lower[j] {
+                -h
+            } else {
+                return Some(vec![0.0; r.len()]);
+            };
             t[j] += h;
             let rp = residuals(&t).filter(finite)?;
             Some(rp.iter().zip(r).map(|(a, b)| (a - b) / h).collect())

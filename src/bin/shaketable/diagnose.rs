@@ -28,14 +28,19 @@ pub fn run(args: Args) -> anyhow::Result<()> {
     let t0 = std::time::Instant::now();
     let campaign = read_campaign(&args.campaign)?;
     let bar = (!args.quiet).then(|| {
-        let b = indicatif::ProgressBar::new(8);
+        let b = indicatif::ProgressBar::new(9);
         b.set_style(
             indicatif::ProgressStyle::with_template("{elapsed:>4} [{bar:30}] {pos}/{len} {msg}")
                 .unwrap_or_else(|_| indicatif::ProgressStyle::default_bar()),
         );
         b
     });
+    // SHAKETABLE_TRACE=1: each step's start time on stderr (for timing runs)
+    let trace = std::env::var_os("SHAKETABLE_TRACE").is_some();
     let report = |i: usize, n: usize, what: &str| {
+        if trace {
+            eprintln!("{:7.2} s  {i}/{n} {what}", t0.elapsed().as_secs_f64());
+        }
         if let Some(b) = &bar {
             b.set_length(n as u64);
             b.set_position(i as u64);
