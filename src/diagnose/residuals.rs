@@ -411,7 +411,7 @@ pub fn band_split(x: &[f64], bands: &[(f64, f64)], sample_rate_hz: f64) -> Vec<V
             }
             // the first and (even n) last bins must be real for the inverse
             s[0].im = 0.0;
-            if n % 2 == 0 {
+            if n.is_multiple_of(2) {
                 if let Some(last) = s.last_mut() {
                     last.im = 0.0;
                 }
