@@ -423,7 +423,7 @@ fn apparent_mass(c: &Campaign) -> Option<(Vec<f64>, Vec<Complex64>)> {
 }
 
 /// Starting points of a candidate's effect parameters (physically informed).
-fn starts(effect: Effect, c: &Campaign, base: &Params) -> Vec<Vec<f64>> {
+fn starts(effect: Effect, c: &Campaign, base: &Params, informed: Option<&[f64]>) -> Vec<Vec<f64>> {
     let m = base.table.mass_kg;
     match effect {
         Effect::Specimen => {
@@ -442,7 +442,7 @@ fn starts(effect: Effect, c: &Campaign, base: &Params) -> Vec<Vec<f64>> {
             // the FRF fit places the mode to a few percent; its mass and damping trade off
             // on a smeared peak, so the mass is spread
             let mut g: Vec<Vec<f64>> = Vec::new();
-            if let Some(f) = foundation_start(c, m) {
+            if let Some(f) = informed {
                 for r in [3.0, 10.0, 40.0] {
                     g.push(vec![r * m, f[1], 0.05]);
                 }
@@ -924,10 +924,12 @@ fn fit_candidate(
             .collect();
         (t0, bt)
     };
+    // the start read off the data (its frequency also seeds the screened spread)
+    let informed = informed_start(e, c, &bases[1]);
     // every start of the effect on every baseline, screened by one evaluation each
     let mut all: Vec<Start> = Vec::new();
     for b in bases {
-        for s in starts(e, c, b) {
+        for s in starts(e, c, b, informed.as_deref()) {
             all.push(start_on(b, &s));
         }
     }
@@ -948,7 +950,7 @@ fn fit_candidate(
     // a start read off the data itself is fitted whatever its screening: a lightly damped
     // foundation mode a few percent off misfits more than none until the baseline has
     // unbent (the section-4 one, which bent least)
-    if let Some(s) = informed_start(e, c, &bases[1]) {
+    if let Some(s) = informed {
         trace(&format!("start from the data: {s:?}"));
         all.push(start_on(&bases[1], &s));
     }

@@ -314,6 +314,26 @@ pub struct Prediction {
     pub draws: Vec<Vec<SensorNoise>>,
 }
 
+impl Prediction {
+    /// The spread of channel `ch` over `range` for each noisy run: its readings plus the
+    /// noise its feedback saw, minus the locked run (the coherent spread of [`scores`]).
+    pub fn spread(&self, range: std::ops::Range<usize>, ch: usize) -> Vec<Vec<f64>> {
+        self.noisy
+            .iter()
+            .zip(&self.draws)
+            .map(|(run, draw)| {
+                range
+                    .clone()
+                    .map(|k| {
+                        simulated(&run[k], ch) + fed_back(&draw[k], ch)
+                            - simulated(&self.locked[k], ch)
+                    })
+                    .collect()
+            })
+            .collect()
+    }
+}
+
 /// Noisy runs per prediction: noise-driven chatter near its threshold comes in
 /// intermittent bursts, and one draw misjudges its expected power.
 pub const REALISATIONS: usize = 1;
@@ -389,12 +409,9 @@ pub fn band_split(x: &[f64], bands: &[(f64, f64)], sample_rate_hz: f64) -> Vec<V
     if half < 2 {
         return bands.iter().map(|_| x.to_vec()).collect();
     }
-    let mut buf: Vec<f64> = x.iter().chain(x.iter().rev()).copied().collect();
-    let n = buf.len();
-    let (fwd, inv) = with_planner(|p| (p.plan_fft_forward(n), p.plan_fft_inverse(n)));
-    let mut spec = fwd.make_output_vec();
-    // realfft only fails on wrong buffer lengths, which are made here
-    let _ = fwd.process(&mut buf, &mut spec);
+    let spec = even_spectrum(x);
+    let n = 2 * half;
+    let inv = with_planner(|p| p.plan_fft_inverse(n));
     let df = sample_rate_hz / n as f64;
     bands
         .iter()
@@ -510,17 +527,7 @@ pub fn scores(
         let white = white_variance(noise, ch);
         let locked = |k: usize| simulated(&pred.locked[k], ch);
         let residual: Vec<f64> = range.clone().map(|k| m[k] - locked(k)).collect();
-        let spread: Vec<Vec<f64>> = pred
-            .noisy
-            .iter()
-            .zip(&pred.draws)
-            .map(|(run, draw)| {
-                range
-                    .clone()
-                    .map(|k| simulated(&run[k], ch) + fed_back(&draw[k], ch) - locked(k))
-                    .collect()
-            })
-            .collect();
+        let spread = pred.spread(range.clone(), ch);
         let meas_bands = band_split(&residual, &bands, sample_rate_hz);
         let spread_bands: Vec<Vec<Vec<f64>>> = spread
             .iter()
@@ -562,6 +569,17 @@ fn with_planner<R>(f: impl FnOnce(&mut realfft::RealFftPlanner<f64>) -> R) -> R 
     PLANNER.with(|p| f(&mut p.borrow_mut()))
 }
 
+/// The real FFT of `x` followed by `x` reversed (the even extension, length `2 len(x)`):
+/// no jump at the ends, so masking its spectrum leaves no edge ripple.
+fn even_spectrum(x: &[f64]) -> Vec<num_complex::Complex64> {
+    let mut buf: Vec<f64> = x.iter().chain(x.iter().rev()).copied().collect();
+    let fwd = with_planner(|p| p.plan_fft_forward(buf.len()));
+    let mut spec = fwd.make_output_vec();
+    // realfft only fails on wrong buffer lengths, which are made here
+    let _ = fwd.process(&mut buf, &mut spec);
+    spec
+}
+
 /// DCT-II of `x` through the FFT of its even extension (the transform that band-splits
 /// without end effects, as [`band_split`]): `C_k = sum x_m cos(pi k (m + 1/2) / N)`,
 /// frequency `k fs / (2N)`. A white series of variance `s^2` gives `E[C_k^2] = s^2 N / 2`.
@@ -570,11 +588,7 @@ pub fn dct(x: &[f64]) -> Vec<f64> {
     if n == 0 {
         return Vec::new();
     }
-    let mut buf: Vec<f64> = x.iter().chain(x.iter().rev()).copied().collect();
-    let fft = with_planner(|p| p.plan_fft_forward(2 * n));
-    let mut spec = fft.make_output_vec();
-    // realfft only fails on wrong buffer lengths, which are made here
-    let _ = fft.process(&mut buf, &mut spec);
+    let spec = even_spectrum(x);
     (0..n)
         .map(|k| {
             let phase = -std::f64::consts::PI * k as f64 / (2 * n) as f64;
@@ -630,14 +644,7 @@ impl Whitening {
                     let white = white_variance(noise, ch);
                     let mut energy = vec![0.0; bands.len()];
                     let mut count = vec![0usize; bands.len()];
-                    for (run, draw) in pred.noisy.iter().zip(&pred.draws) {
-                        let spread: Vec<f64> = range
-                            .clone()
-                            .map(|k| {
-                                simulated(&run[k], ch) + fed_back(&draw[k], ch)
-                                    - simulated(&pred.locked[k], ch)
-                            })
-                            .collect();
+                    for spread in pred.spread(range.clone(), ch) {
                         for (k, v) in dct(&spread).iter().enumerate() {
                             energy[band_of(k)] += v * v / pred.noisy.len() as f64;
                         }
