@@ -14,6 +14,11 @@ pub const DEFAULT_MAX_SUBSTEP_S: f64 = 1.0 / 3072.0;
 /// Upper bound on sub-steps per interval, so a runaway state cannot stall a run.
 pub const MAX_SUBSTEPS_PER_INTERVAL: usize = 100_000;
 
+/// A table moving faster than this many times its valve's no-load speed at full opening
+/// (`Kq / A`, 2.2 m/s with the defaults) has left the physics the model describes: the
+/// run has gone unstable ([`Simulator::diverged`]).
+pub const DIVERGED_SPEED_FACTOR: f64 = 10.0;
+
 /// History of the valve command for the `delay` servovalve (spec section 3):
 /// `(time, u)` pairs at every sub-step end, linearly interpolated.
 #[derive(Debug, Clone, Default, PartialEq)]
@@ -136,6 +141,31 @@ impl Simulator {
         }
     }
 
+    /// Why the run has diverged, if it has: a non-finite state, or the table (relative
+    /// to the reaction mass) faster than [`DIVERGED_SPEED_FACTOR`] times the valve's
+    /// no-load speed at full opening. Checked by [`simulate_record`] and the FMU's
+    /// `fmi2DoStep`: past this the Bouc-Wen guard of [`Simulator::substeps`] would spend
+    /// minutes on ever-finer sub-steps of a meaningless state.
+    pub fn diverged(&self) -> Option<String> {
+        if self.state.iter().any(|x| !x.is_finite()) {
+            return Some(format!(
+                "the model state became non-finite at t = {} s",
+                self.time_s
+            ));
+        }
+        let a = &self.model.params.actuator;
+        let limit = DIVERGED_SPEED_FACTOR * a.flow_gain_m3_s / a.piston_area_m2;
+        let v = self.state[crate::model::ix::V] - self.state[crate::model::ix::VF];
+        (v.abs() > limit).then(|| {
+            format!(
+                "the simulation diverged at t = {} s: table velocity {v:.3e} m/s, beyond \
+                 {DIVERGED_SPEED_FACTOR} times the valve's full-opening speed Kq/A \
+                 ({limit:.3} m/s); the parameters make the run unstable (the control loop, or the integration at this sub-step)",
+                self.time_s
+            )
+        })
+    }
+
     /// Number of sub-steps used for an interval of `dt_s`: at most `max_substep_s` each,
     /// and short enough for the Bouc-Wen equation (eq. 4.15), whose rate near `|Z| = 1` is
     /// about `2 |v| / Y`: RK4 is stable for `h * rate < 2.78`; the guard keeps it below 1
@@ -218,7 +248,9 @@ impl Simulator {
 /// Simulate a sampled record: `inputs[k]` at `t_k = k / sample_rate`, optional sensor
 /// noise per sample (held over the sample interval, inside the loop). Returns the
 /// noise-free readings at every sample; `valve_command` is what the controller sent,
-/// i.e. computed on the noisy feedback.
+/// i.e. computed on the noisy feedback. A run that diverges ([`Simulator::diverged`])
+/// stops there: every later sample is NaN, so no caller takes it for a response (see
+/// [`first_divergence`] for the message).
 pub fn simulate_record(
     model: &Model,
     inputs: &[Inputs],
@@ -237,7 +269,30 @@ pub fn simulate_record(
             sim.advance(dt, &inputs[k], &inputs[k + 1], nk);
             // keep sample times exact (no drift from repeated addition)
             sim.time_s = (k + 1) as f64 * dt;
+            if sim.diverged().is_some() {
+                out.resize(inputs.len(), DIVERGED);
+                break;
+            }
         }
     }
     out
+}
+
+/// What [`simulate_record`] writes for the samples after a divergence.
+const DIVERGED: Outputs = Outputs {
+    valve_command: f64::NAN,
+    spool_position: f64::NAN,
+    displacement_m: f64::NAN,
+    velocity_m_s: f64::NAN,
+    acceleration_m_s2: f64::NAN,
+    actuator_force_n: f64::NAN,
+    pressure_a_pa: f64::NAN,
+    pressure_b_pa: f64::NAN,
+};
+
+/// The time of the first sample [`simulate_record`] marked as diverged, if any.
+pub fn first_divergence(out: &[Outputs], sample_rate_hz: f64) -> Option<f64> {
+    out.iter()
+        .position(|o| o.displacement_m.is_nan())
+        .map(|k| k as f64 / sample_rate_hz)
 }

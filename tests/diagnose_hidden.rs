@@ -214,26 +214,21 @@ fn finds_a_soft_lightly_damped_foundation() {
     );
 }
 
-/// Stick-slip chatter grows out of the in-loop noise: scored by the predictive score
-/// (noise-driven runs), fitted by a grid. Known limitation (issue 6 stays open): weak,
-/// intermittent chatter (e.g. seed 303: r_s 1.75, v_s 7 mm/s) improves the score by only
-/// 1.19 and is named `none`.
+/// Stick-slip chatter grows out of the in-loop noise: fitted from the friction-velocity
+/// curve of the slow tests, polished on the predictive score (noise-driven runs). Seed
+/// 303 (r_s 1.75, v_s 7.1 mm/s: weak, intermittent chatter) was named `none`, then found
+/// 36 % off by the grid the curve replaced.
 #[test]
 fn finds_stick_slip() {
-    check(
-        &Params::trees_lab(),
-        "stick_slip",
-        "static_ratio",
-        0.25,
-        301,
-    );
-    check(
-        &Params::trees_lab(),
-        "stick_slip",
-        "static_ratio",
-        0.25,
-        302,
-    );
+    for seed in [301, 302, 303] {
+        check(
+            &Params::trees_lab(),
+            "stick_slip",
+            "static_ratio",
+            0.25,
+            seed,
+        );
+    }
 }
 
 #[test]

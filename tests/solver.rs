@@ -118,3 +118,24 @@ fn halving_the_substep_changes_outputs_by_less_than_1e_6_of_rms() {
         }
     }
 }
+
+/// An unstable run (a 5 kHz servovalve integrated at 1/3072 s: h w = 10, beyond RK4's
+/// stability limit of 2.78, as an optimiser's trial parameters can be) is stopped when
+/// the table outruns ten times its valve's full-opening speed: the later samples are NaN
+/// and `first_divergence` says when, rather than the Bouc-Wen guard refining sub-steps of
+/// a meaningless state for minutes.
+#[test]
+fn an_unstable_run_is_stopped_and_marked() {
+    let p = Params::trees_lab();
+    let r = sine(0.01, 1.0, 5.0);
+    let stable = simulate_record(&Model::new(&p), &r, FS, None, DEFAULT_MAX_SUBSTEP_S);
+    assert_eq!(shaketable::solver::first_divergence(&stable, FS), None);
+    let mut q = p;
+    q.servovalve.natural_frequency_hz = 5000.0;
+    let out = simulate_record(&Model::new(&q), &r, FS, None, DEFAULT_MAX_SUBSTEP_S);
+    let t = shaketable::solver::first_divergence(&out, FS).expect("the loop diverges");
+    assert!(t > 0.0 && t < 5.0, "diverged at {t} s");
+    let k = (t * FS).round() as usize;
+    assert!(out[..k].iter().all(|o| o.displacement_m.is_finite()));
+    assert!(out[k..].iter().all(|o| o.actuator_force_n.is_nan()));
+}

@@ -29,7 +29,7 @@ use super::{
 };
 use crate::model::{Inputs, Model, Outputs, Reference, SensorNoise};
 use crate::params::Params;
-use crate::solver::{simulate_record, DEFAULT_MAX_SUBSTEP_S};
+use crate::solver::{first_divergence, simulate_record, DEFAULT_MAX_SUBSTEP_S};
 use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;
 use rand_distr::{Distribution, Normal};
@@ -623,6 +623,14 @@ pub fn synthesise_test(
     let model = Model::new(&p);
     let noise_arg = if nl.is_none() { None } else { Some(&noise[..]) };
     let truth = simulate_record(&model, &inputs, fs, noise_arg, opts.max_substep_s);
+    if let Some(t) = first_divergence(&truth, fs) {
+        return Err(SynthError::BadTest {
+            name: spec.name.clone(),
+            message: format!(
+                "the simulation diverged at t = {t} s (the parameters make the run unstable: the control loop, or the integration at this sub-step)"
+            ),
+        });
+    }
     let rec = Record {
         time_s: (0..n).map(|k| k as f64 / fs).collect(),
         ref_displacement_m: r.displacement_m,

@@ -367,7 +367,8 @@ pub fn predict(p: &Params, c: &Campaign, i: usize, part: Part, noise: &NoiseFloo
     }
 }
 
-/// Held-out figures of a model per channel (NaN where the channel is absent).
+/// Held-out figures of a model per channel (NaN where the channel is absent, infinite
+/// where the run diverged).
 #[derive(Debug, Clone, Copy)]
 pub struct CellScores {
     /// The predictive score as an equivalent noise ratio: the square root of the mean over
@@ -528,6 +529,17 @@ pub fn scores(
         let locked = |k: usize| simulated(&pred.locked[k], ch);
         let residual: Vec<f64> = range.clone().map(|k| m[k] - locked(k)).collect();
         let spread = pred.spread(range.clone(), ch);
+        // a run that diverged ([`crate::solver::simulate_record`] marks it NaN) predicts
+        // nothing: an infinite score, never a cell left out as if the channel were absent
+        if residual
+            .iter()
+            .chain(spread.iter().flatten())
+            .any(|x| !x.is_finite())
+        {
+            out.score[ch] = f64::INFINITY;
+            out.residual[ch] = f64::INFINITY;
+            continue;
+        }
         let meas_bands = band_split(&residual, &bands, sample_rate_hz);
         let spread_bands: Vec<Vec<Vec<f64>>> = spread
             .iter()
@@ -732,7 +744,7 @@ pub fn score_sum(p: &Params, c: &Campaign, tests: &[usize], noise: &NoiseFloor, 
             test_scores(p, c, i, part, noise)
                 .score
                 .iter()
-                .filter(|x| x.is_finite())
+                .filter(|x| !x.is_nan())
                 .map(|x| x * x)
                 .sum::<f64>()
         })

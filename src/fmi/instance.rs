@@ -350,12 +350,10 @@ impl Instance {
             return err(F, "internal: no simulator after initialization");
         };
         sim.advance(h, &from, &to, &SensorNoise::default());
-        if sim.state.iter().any(|x| !x.is_finite()) {
+        sim.time_s = t + h;
+        if let Some(why) = sim.diverged() {
             self.phase = Phase::Error;
-            return err(
-                F,
-                format!("the model state became non-finite at t = {}", t + h),
-            );
+            return err(F, why);
         }
         // the end time exactly, without drift from repeated addition
         self.time_s = t + h;

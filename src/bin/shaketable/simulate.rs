@@ -10,6 +10,7 @@
 use anyhow::Context;
 use shaketable::campaign::format::{read_campaign_info, read_reference, write_record};
 use shaketable::campaign::{CampaignInfo, Record, TestSpec};
+use shaketable::solver::first_divergence;
 use shaketable::solver::DEFAULT_MAX_SUBSTEP_S;
 use shaketable::{simulate_record, Model};
 use std::path::{Path, PathBuf};
@@ -134,6 +135,15 @@ pub fn run(a: Args) -> anyhow::Result<()> {
     let fs = reference.sample_rate_hz;
     let model = Model::new(&params);
     let out = simulate_record(&model, &reference.inputs(), fs, None, a.max_substep);
+    if let Some(t) = first_divergence(&out, fs) {
+        anyhow::bail!(
+            "simulating {}: the simulation diverged at t = {t} s (the table outran {} times its \
+             valve's full-opening speed, or the state became non-finite): the parameters make \
+             the run unstable (the control loop, or the integration at this sub-step)",
+            a.reference.display(),
+            shaketable::solver::DIVERGED_SPEED_FACTOR
+        );
+    }
     let col = |f: fn(&shaketable::Outputs) -> f64| out.iter().map(f).collect::<Vec<f64>>();
     let record = Record {
         time_s: reference.time_s.clone(),
