@@ -43,6 +43,11 @@ use serde::Serialize;
 use std::collections::BTreeMap;
 use std::f64::consts::PI;
 
+/// `SHAKETABLE_TRACE` set: the diagnosis prints its steps' and fits' timings on stderr.
+pub fn trace_enabled() -> bool {
+    std::env::var_os("SHAKETABLE_TRACE").is_some()
+}
+
 /// A candidate must divide the baseline's held-out residual by at least this to be named.
 pub const REQUIRED_GAIN: f64 = 1.25;
 /// Held-out residual (RMS over channels and tests, in noise units) at or below which the
@@ -226,9 +231,10 @@ pub fn residual_vector(
 }
 
 /// The baseline parameters as a vector: `[M, beta, C_l, F_mu, Kq, Y, Ks, f_v, xi, tau,
-/// b]`; [`REFINED`] and [`REFINED_FRICTION`] say which the output-error refinement frees. The valve (Ks and its
-/// dynamics) is refined before, on the spool channel alone
-/// ([`crate::identify::spool::refine_servovalve`]), where the flow effects cannot bend it.
+/// b]`. The valve is first fitted on the spool channel alone
+/// ([`crate::identify::spool::refine_servovalve`]), where the flow effects cannot bend
+/// it; the output-error refinement then frees [`REFINED`], [`REFINED_FRICTION`] and the
+/// valve dynamics, the candidates' fits [`REFINED`] only.
 fn baseline_theta(p: &Params) -> Vec<f64> {
     let v = &p.servovalve;
     vec![
@@ -595,10 +601,10 @@ pub fn diagnose(c: &Campaign, progress: Option<Progress>) -> Diagnosis {
     //    variants; the one that fits better is the baseline's structure
     tick(1, "refining the baseline by output error");
     let whitening = Whitening::new(&base, c, &fit_idx, &noise, Part::Fit);
-    let refine = |p0: &Params, iterations: usize| -> (f64, Params) {
-        match refine_output_error(c, p0, None, &fit_idx, &whitening, iterations) {
+    let refine = |p0: &Params| -> (f64, Params) {
+        match refine_output_error(c, p0, None, &fit_idx, &whitening, BASELINE_ITERATIONS) {
             Some((cost, p, n)) => {
-                if std::env::var_os("SHAKETABLE_TRACE").is_some() {
+                if trace_enabled() {
                     eprintln!(
                         "  refinement ({:?}): {n} iterations, cost {cost:.4}",
                         p0.actuator.model
@@ -615,8 +621,8 @@ pub fn diagnose(c: &Campaign, progress: Option<Progress>) -> Diagnosis {
         p
     };
     let (ideal, nonlinear) = rayon::join(
-        || refine(&variant(ActuatorModel::Ideal), 8),
-        || refine(&variant(ActuatorModel::Nonlinear), 8),
+        || refine(&variant(ActuatorModel::Ideal)),
+        || refine(&variant(ActuatorModel::Nonlinear)),
     );
     let actuator_costs = [ideal.0, nonlinear.0];
     base = if nonlinear.0 < ideal.0 {
@@ -823,6 +829,10 @@ fn refine_output_error(
     Some((fit.cost, assemble(&fit.theta), fit.iterations))
 }
 
+/// Output-error iterations of the baseline's refinement: a baseline that lacks an effect
+/// never converges, and 8 bring a clean campaign's to its noise floor.
+const BASELINE_ITERATIONS: usize = 8;
+
 /// A start of a candidate's fit: the effect's and the free baseline parameters, and the
 /// whole baseline vector ([`baseline_theta`]) the others are taken from.
 type Start = (Vec<f64>, Vec<f64>);
@@ -852,7 +862,7 @@ fn fit_candidate(
     }
     let t0 = std::time::Instant::now();
     let trace = |what: &str| {
-        if std::env::var_os("SHAKETABLE_TRACE").is_some() {
+        if trace_enabled() {
             eprintln!(
                 "  {} {what} after {:.1} s",
                 e.name(),

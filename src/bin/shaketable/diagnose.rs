@@ -36,7 +36,7 @@ pub fn run(args: Args) -> anyhow::Result<()> {
         b
     });
     // SHAKETABLE_TRACE=1: each step's start time on stderr (for timing runs)
-    let trace = std::env::var_os("SHAKETABLE_TRACE").is_some();
+    let trace = shaketable::diagnose::trace_enabled();
     let report = |i: usize, n: usize, what: &str| {
         if trace {
             eprintln!("{:7.2} s  {i}/{n} {what}", t0.elapsed().as_secs_f64());
