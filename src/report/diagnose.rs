@@ -166,7 +166,7 @@ pub fn write(dir: &Path, c: &Campaign, d: &Diagnosis) -> anyhow::Result<()> {
         "<h1>Diagnosis of {}</h1><p><b>Cause: {cause}</b>, gain {:.2} on held-out data, explained: {}.</p>\
          <p>Baseline: servovalve {}, actuator {} (chosen by output error: cost {:.4e} ideal, {:.4e} nonlinear); \
          noise floor from {}: displacement {:.3e} m, acceleration {:.3e} m/s^2, force {:.1} N, spool {:.3e}, \
-         valve command {:.3e}.</p><p>Rule: {}</p>",
+         valve command {:.3e}.</p>{}<p>Rule: {}</p>",
         c.info.name,
         d.gain,
         d.explained,
@@ -180,6 +180,9 @@ pub fn write(dir: &Path, c: &Campaign, d: &Diagnosis) -> anyhow::Result<()> {
         d.noise.force_n,
         d.noise.spool,
         d.noise.valve_command,
+        d.structure_change()
+            .map(|s| format!("<p>Note: {s}.</p>"))
+            .unwrap_or_default(),
         j["rule"].as_str().unwrap_or("")
     );
     let _ = writeln!(
@@ -187,6 +190,9 @@ pub fn write(dir: &Path, c: &Campaign, d: &Diagnosis) -> anyhow::Result<()> {
         "# Diagnosis of `{}`\n\n**Cause: {cause}**, gain {:.2}, explained: {}\n",
         c.info.name, d.gain, d.explained
     );
+    if let Some(s) = d.structure_change() {
+        let _ = writeln!(md, "Note: {s}.\n");
+    }
     html.push_str(
         "<h2>What the baseline gets wrong: residual RMS / noise RMS</h2><table><tr><th>test</th>",
     );

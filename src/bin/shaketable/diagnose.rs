@@ -111,6 +111,9 @@ pub fn run(args: Args) -> anyhow::Result<()> {
         d.explained,
         j["parameters"]
     );
+    if let Some(note) = d.structure_change() {
+        println!("{note}");
+    }
     if let Some(p) = &args.json {
         std::fs::write(p, serde_json::to_string_pretty(&j)? + "\n")
             .with_context(|| format!("cannot write {}", p.display()))?;
