@@ -1212,13 +1212,16 @@ fn grid_stick_slip(eval: &StickSlipEval, f0: f64) -> Option<[f64; 3]> {
 fn polish_stick_slip(eval: &StickSlipEval, start: [f64; 3]) -> Option<(f64, Vec<f64>, Params)> {
     use argmin::core::{CostFunction, Executor};
     use argmin::solver::neldermead::NelderMead;
-    let point = |x: &[f64]| (1.0 + x[0].exp(), x[1].exp(), x[2].exp());
+    // the simplex coordinates -> (r_s, v_s, F_mu)
+    fn point(x: &[f64]) -> (f64, f64, f64) {
+        (1.0 + x[0].exp(), x[1].exp(), x[2].exp())
+    }
     struct Score<'a, 'b>(&'a StickSlipEval<'b>);
     impl CostFunction for Score<'_, '_> {
         type Param = Vec<f64>;
         type Output = f64;
         fn cost(&self, x: &Vec<f64>) -> Result<f64, argmin::core::Error> {
-            let (r, v, f) = (1.0 + x[0].exp(), x[1].exp(), x[2].exp());
+            let (r, v, f) = point(x);
             // Effect::StickSlip's bounds
             if !(r <= 6.0 && (1e-4..=0.05).contains(&v)) {
                 return Ok(f64::INFINITY);
