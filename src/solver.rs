@@ -296,3 +296,14 @@ pub fn first_divergence(out: &[Outputs], sample_rate_hz: f64) -> Option<f64> {
         .position(|o| o.displacement_m.is_nan())
         .map(|k| k as f64 / sample_rate_hz)
 }
+
+/// What a caller of [`simulate_record`] reports for a run [`first_divergence`] found
+/// diverged at `t_s` (the simulate command, the synthesiser).
+pub fn divergence_message(t_s: f64) -> String {
+    format!(
+        "the simulation diverged at t = {t_s} s (the table outran {DIVERGED_SPEED_FACTOR} \
+         times its valve's full-opening speed Kq/A, or the state became non-finite): the \
+         parameters make the run unstable (the control loop, or the integration at this \
+         sub-step)"
+    )
+}

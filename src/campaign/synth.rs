@@ -29,7 +29,7 @@ use super::{
 };
 use crate::model::{Inputs, Model, Outputs, Reference, SensorNoise};
 use crate::params::Params;
-use crate::solver::{first_divergence, simulate_record, DEFAULT_MAX_SUBSTEP_S};
+use crate::solver::{divergence_message, first_divergence, simulate_record, DEFAULT_MAX_SUBSTEP_S};
 use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;
 use rand_distr::{Distribution, Normal};
@@ -626,9 +626,7 @@ pub fn synthesise_test(
     if let Some(t) = first_divergence(&truth, fs) {
         return Err(SynthError::BadTest {
             name: spec.name.clone(),
-            message: format!(
-                "the simulation diverged at t = {t} s (the parameters make the run unstable: the control loop, or the integration at this sub-step)"
-            ),
+            message: divergence_message(t),
         });
     }
     let rec = Record {

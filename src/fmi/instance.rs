@@ -350,14 +350,13 @@ impl Instance {
             return err(F, "internal: no simulator after initialization");
         };
         sim.advance(h, &from, &to, &SensorNoise::default());
+        // the end time exactly, without drift from repeated addition
         sim.time_s = t + h;
         if let Some(why) = sim.diverged() {
             self.phase = Phase::Error;
             return err(F, why);
         }
-        // the end time exactly, without drift from repeated addition
-        self.time_s = t + h;
-        sim.time_s = self.time_s;
+        self.time_s = sim.time_s;
         Ok(())
     }
 

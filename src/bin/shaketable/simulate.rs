@@ -10,8 +10,8 @@
 use anyhow::Context;
 use shaketable::campaign::format::{read_campaign_info, read_reference, write_record};
 use shaketable::campaign::{CampaignInfo, Record, TestSpec};
-use shaketable::solver::first_divergence;
 use shaketable::solver::DEFAULT_MAX_SUBSTEP_S;
+use shaketable::solver::{divergence_message, first_divergence};
 use shaketable::{simulate_record, Model};
 use std::path::{Path, PathBuf};
 
@@ -137,11 +137,9 @@ pub fn run(a: Args) -> anyhow::Result<()> {
     let out = simulate_record(&model, &reference.inputs(), fs, None, a.max_substep);
     if let Some(t) = first_divergence(&out, fs) {
         anyhow::bail!(
-            "simulating {}: the simulation diverged at t = {t} s (the table outran {} times its \
-             valve's full-opening speed, or the state became non-finite): the parameters make \
-             the run unstable (the control loop, or the integration at this sub-step)",
+            "simulating {}: {}",
             a.reference.display(),
-            shaketable::solver::DIVERGED_SPEED_FACTOR
+            divergence_message(t)
         );
     }
     let col = |f: fn(&shaketable::Outputs) -> f64| out.iter().map(f).collect::<Vec<f64>>();
