@@ -445,6 +445,75 @@ impl Linearisation {
     }
 }
 
+/// A closed-loop pole with a positive real part counts as unstable once its real part
+/// exceeds this fraction of its magnitude (or of 1 rad/s near the origin): the
+/// eigenvalue solver's round-off on a marginal pole at zero (no displacement feedback)
+/// is about 1e-12 of the matrix norm, and a growth this slow (1e-9 of the frequency)
+/// would take longer than any test to show.
+pub const UNSTABLE_REAL_PART: f64 = 1e-9;
+
+/// A closed-loop pole in the figures a user reads.
+#[derive(Debug, Clone, Copy, PartialEq, serde::Serialize)]
+pub struct Pole {
+    pub frequency_hz: f64,
+    /// `-Re / |p|`: negative for a growing oscillation.
+    pub damping_ratio: f64,
+    pub re: f64,
+    pub im: f64,
+}
+
+impl Pole {
+    fn of(q: Complex64) -> Pole {
+        Pole {
+            frequency_hz: q.norm() / (2.0 * PI),
+            damping_ratio: if q.norm() > 0.0 {
+                -q.re / q.norm()
+            } else {
+                1.0
+            },
+            re: q.re,
+            im: q.im,
+        }
+    }
+}
+
+impl Linearisation {
+    /// The closed-loop poles with `Im >= 0` (one of each conjugate pair), as [`Pole`]s.
+    pub fn upper_poles(&self) -> Vec<Pole> {
+        self.poles()
+            .into_iter()
+            .filter(|q| q.im >= 0.0)
+            .map(Pole::of)
+            .collect()
+    }
+
+    /// The poles of [`Linearisation::upper_poles`] with a positive real part (spec
+    /// section 8): the loop at rest is unstable.
+    pub fn unstable_poles(&self) -> Vec<Pole> {
+        self.upper_poles()
+            .into_iter()
+            .filter(|q| q.re > UNSTABLE_REAL_PART * q.re.hypot(q.im).max(1.0))
+            .collect()
+    }
+}
+
+/// The warning every command that computes or simulates with `p` prints (spec section
+/// 8): `None` when the closed loop at rest is stable.
+pub fn stability_warning(p: &Params) -> Option<String> {
+    let unstable = Linearisation::new(p).unstable_poles();
+    let worst = unstable.iter().max_by(|a, b| a.re.total_cmp(&b.re))?;
+    Some(format!(
+        "the closed loop is unstable at rest: {} pole(s) with a positive real part, \
+         the fastest-growing at {:.3} Hz with damping ratio {:.4} (pole {:.4} {:+.4}i \
+         rad/s); a run will grow until it leaves the operating limits",
+        unstable.len(),
+        worst.frequency_hz,
+        worst.damping_ratio,
+        worst.re,
+        worst.im
+    ))
+}
+
 /// `start, start + step, ... <= stop`.
 pub fn linear_grid(start: f64, stop: f64, step: f64) -> Vec<f64> {
     let n = ((stop - start) / step + 1e-9).floor() as usize + 1;

@@ -307,6 +307,29 @@ impl Default for ValveDeadband {
     }
 }
 
+/// Operating limits (spec section 8): the table's envelope. A run that leaves it
+/// describes nothing real (a real table's end stops, relief valves and interlocks act
+/// first), so the solver stops it with an error naming the time and the limit.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+#[serde(default, deny_unknown_fields)]
+pub struct Limits {
+    /// Stroke, m: the LVDT displacement may not exceed 1.1 times it.
+    pub stroke_m: f64,
+    /// Velocity limit, m/s: the table's speed relative to the reaction mass may not
+    /// exceed twice it.
+    pub velocity_m_s: f64,
+}
+
+impl Default for Limits {
+    fn default() -> Self {
+        // TREES Lab, paper section 2: +-0.5 m stroke, 2.2 m/s peak velocity
+        Limits {
+            stroke_m: 0.5,
+            velocity_m_s: 2.2,
+        }
+    }
+}
+
 /// Every parameter of the table model: one block per part of the spec.
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize, Default)]
 #[serde(default, deny_unknown_fields)]
@@ -321,6 +344,7 @@ pub struct Params {
     pub stick_slip: StickSlip,
     pub flow_saturation: FlowSaturation,
     pub valve_deadband: ValveDeadband,
+    pub limits: Limits,
 }
 
 /// Names of the catalogue effects (spec section 7), in catalogue order.
@@ -380,29 +404,35 @@ impl Params {
         let a = &self.actuator;
         let mut rules: Vec<(&str, f64, Rule)> = vec![
             ("servovalve.gain", c.gain, Positive),
-            ("actuator.piston_area_m2", a.piston_area_m2, Positive),
+            ("actuator.piston_area_m2", a.piston_area_m2, PISTON_AREA_M2),
             (
                 "actuator.total_oil_volume_m3",
                 a.total_oil_volume_m3,
-                Positive,
+                OIL_VOLUME_M3,
             ),
-            ("actuator.bulk_modulus_pa", a.bulk_modulus_pa, Positive),
+            (
+                "actuator.bulk_modulus_pa",
+                a.bulk_modulus_pa,
+                BULK_MODULUS_PA,
+            ),
             ("actuator.leakage_m3_s_pa", a.leakage_m3_s_pa, NonNegative),
-            ("actuator.flow_gain_m3_s", a.flow_gain_m3_s, Positive),
+            ("actuator.flow_gain_m3_s", a.flow_gain_m3_s, FLOW_GAIN_M3_S),
             (
                 "actuator.supply_pressure_pa",
                 a.supply_pressure_pa,
-                Positive,
+                SUPPLY_PRESSURE_PA,
             ),
-            ("table.mass_kg", self.table.mass_kg, Positive),
+            ("table.mass_kg", self.table.mass_kg, TABLE_MASS_KG),
             ("table.stiffness_n_m", self.table.stiffness_n_m, NonNegative),
             ("friction.force_n", self.friction.force_n, NonNegative),
             (
                 "friction.yield_displacement_m",
                 self.friction.yield_displacement_m,
-                Positive,
+                YIELD_DISPLACEMENT_M,
             ),
             ("friction.shape", self.friction.shape, HalfOpenUnit),
+            ("limits.stroke_m", self.limits.stroke_m, Positive),
+            ("limits.velocity_m_s", self.limits.velocity_m_s, Positive),
         ];
         match c.model {
             ServovalveModel::Delay => {
@@ -474,7 +504,7 @@ impl Params {
         }
         for (key, value, rule) in rules {
             if let Some(text) = rule.broken_by(value) {
-                return Err(invalid(file, key, value, text));
+                return Err(invalid(file, key, value, &text));
             }
         }
         Ok(())
@@ -526,6 +556,8 @@ impl Params {
                 self.flow_saturation.max_flow_m3_s,
             ),
             ("valve_deadband.deadband", self.valve_deadband.deadband),
+            ("limits.stroke_m", self.limits.stroke_m),
+            ("limits.velocity_m_s", self.limits.velocity_m_s),
         ]
     }
 
@@ -582,32 +614,90 @@ fn invalid(file: &str, key: &str, value: f64, rule: &str) -> ParamsError {
     }
 }
 
-#[derive(Clone, Copy)]
-enum Rule {
+/// A validation rule of one parameter.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum Rule {
     Positive,
     NonNegative,
     HalfOpenUnit,
     AtLeastOne,
+    /// A physical range `[min, max]`, inclusive, with why these bounds.
+    Range {
+        min: f64,
+        max: f64,
+        why: &'static str,
+    },
 }
 
+/// Piston area: from a 4 mm bore (a bench-top shaker) to a 3.5 m bore. Beyond it the
+/// oil-column stiffness `4 beta A^2 / V_t` over- or underflows in parameter files.
+pub const PISTON_AREA_M2: Rule = Rule::Range {
+    min: 1e-5,
+    max: 10.0,
+    why: "from a 4 mm bore to a 3.5 m bore",
+};
+/// Total oil volume: a few cm^3 (a small actuator) to 100 m^3 (far above any table).
+pub const OIL_VOLUME_M3: Rule = Rule::Range {
+    min: 1e-6,
+    max: 100.0,
+    why: "from a few cm^3 to far above any table",
+};
+/// Effective bulk modulus: heavily aerated oil (1e7 Pa) to steel (2e11 Pa).
+pub const BULK_MODULUS_PA: Rule = Rule::Range {
+    min: 1e7,
+    max: 2e11,
+    why: "from aerated oil to steel",
+};
+/// Valve flow gain: a 1 cm^3/s micro-valve to 100 m^3/s (fifty times the largest tables).
+pub const FLOW_GAIN_M3_S: Rule = Rule::Range {
+    min: 1e-6,
+    max: 100.0,
+    why: "from a micro-valve to fifty times the largest tables",
+};
+/// Supply pressure: 1 bar to 1 GPa (hydraulics run at 7-70 MPa).
+pub const SUPPLY_PRESSURE_PA: Rule = Rule::Range {
+    min: 1e5,
+    max: 1e9,
+    why: "from 1 bar to 10 kbar",
+};
+/// Table mass: a 100 g shaker armature to 10 000 t (E-Defense moves about 1 200 t).
+pub const TABLE_MASS_KG: Rule = Rule::Range {
+    min: 0.1,
+    max: 1e7,
+    why: "from a shaker armature to 10 000 t",
+};
+/// Bouc-Wen yield displacement Y (eq. 4.15). Below 1 um the pre-sliding branch lies under
+/// any table LVDT's resolution (16 bits over +-0.5 m: 15 um), so it cannot be identified
+/// and the friction is Coulomb-like anyway; and the solver's sub-step guard needs
+/// `2 |v| dt / Y` sub-steps per interval (at 1 um and 2.2 m/s, 8 600 per 1/512-s sample,
+/// about 1 000 times the usual): a yield of 1e-9 m turned a 22-s run into minutes.
+pub const YIELD_DISPLACEMENT_M: Rule = Rule::Range {
+    min: 1e-6,
+    max: 1.0,
+    why: "below 1 um the pre-sliding branch is finer than any LVDT resolves and costs \
+          the solver millions of sub-steps",
+};
+
 impl Rule {
-    fn broken_by(self, v: f64) -> Option<&'static str> {
+    /// `None` when `v` satisfies the rule, else the rule in words.
+    pub fn broken_by(self, v: f64) -> Option<String> {
         let ok = match self {
             Rule::Positive => v > 0.0,
             Rule::NonNegative => v >= 0.0,
             Rule::HalfOpenUnit => (0.0..1.0).contains(&v),
             Rule::AtLeastOne => v >= 1.0,
+            Rule::Range { min, max, .. } => (min..=max).contains(&v),
         };
         if ok {
-            None
-        } else {
-            Some(match self {
-                Rule::Positive => "must be > 0",
-                Rule::NonNegative => "must be >= 0",
-                Rule::HalfOpenUnit => "must be in [0, 1)",
-                Rule::AtLeastOne => "must be >= 1",
-            })
+            return None;
         }
+        Some(match self {
+            Rule::Positive => "must be > 0".into(),
+            Rule::NonNegative => "must be >= 0".into(),
+            Rule::HalfOpenUnit => "must be in [0, 1)".into(),
+            Rule::AtLeastOne => "must be >= 1".into(),
+            Rule::Range { min, max, why } => format!("must be in [{min:e}, {max:e}] ({why})"),
+        })
     }
 }
 
@@ -652,7 +742,9 @@ mod tests {
         let e = Params::from_toml_str("[table]\nmass_kg = -1.0\n", "lab.toml").unwrap_err();
         let m = e.to_string();
         assert!(
-            m.contains("lab.toml") && m.contains("table.mass_kg") && m.contains("> 0"),
+            m.contains("lab.toml")
+                && m.contains("table.mass_kg")
+                && m.contains("must be in [1e-1, 1e7]"),
             "{m}"
         );
         let e = Params::from_toml_str(

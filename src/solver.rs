@@ -141,27 +141,31 @@ impl Simulator {
         }
     }
 
-    /// Why the run has diverged, if it has: a non-finite state, or the table (relative
-    /// to the reaction mass) faster than [`DIVERGED_SPEED_FACTOR`] times the valve's
-    /// no-load speed at full opening. Checked by [`simulate_record`] and the FMU's
-    /// `fmi2DoStep`: past this the Bouc-Wen guard of [`Simulator::substeps`] would spend
-    /// minutes on ever-finer sub-steps of a meaningless state.
+    /// Why the run must stop, if it must: a state outside the operating envelope
+    /// (spec section 8, [`crate::model::limits`]: non-finite, stroke, velocity,
+    /// pressure), or the table (relative to the reaction mass) faster than
+    /// [`DIVERGED_SPEED_FACTOR`] times the valve's no-load speed at full opening, a
+    /// numerical guard for velocity limits set above it. Checked by [`simulate_record`]
+    /// and the FMU's `fmi2DoStep`: past this the Bouc-Wen guard of
+    /// [`Simulator::substeps`] would spend minutes on ever-finer sub-steps of a
+    /// meaningless state.
     pub fn diverged(&self) -> Option<String> {
-        if self.state.iter().any(|x| !x.is_finite()) {
-            return Some(format!(
-                "the model state became non-finite at t = {} s",
-                self.time_s
-            ));
+        let t = self.time_s;
+        if let Some(e) = crate::model::limits::check(&self.model.params, &self.state) {
+            return Some(match e {
+                crate::model::limits::Exceeded::NonFinite => format!("at t = {t} s: {e}"),
+                _ => format!("the run left the table's operating envelope at t = {t} s: {e}"),
+            });
         }
         let a = &self.model.params.actuator;
         let limit = DIVERGED_SPEED_FACTOR * a.flow_gain_m3_s / a.piston_area_m2;
         let v = self.state[crate::model::ix::V] - self.state[crate::model::ix::VF];
         (v.abs() > limit).then(|| {
             format!(
-                "the simulation diverged at t = {} s: table velocity {v:.3e} m/s, beyond \
+                "the simulation diverged at t = {t} s: table velocity {v:.3e} m/s, beyond \
                  {DIVERGED_SPEED_FACTOR} times the valve's full-opening speed Kq/A \
-                 ({limit:.3} m/s); the parameters make the run unstable (the control loop, or the integration at this sub-step)",
-                self.time_s
+                 ({limit:.3} m/s); the parameters make the run unstable (the control loop, \
+                 or the integration at this sub-step)"
             )
         })
     }
@@ -245,12 +249,29 @@ impl Simulator {
     }
 }
 
+/// A simulated record and, if the run had to stop, when and why.
+#[derive(Debug, Clone)]
+pub struct Run {
+    /// Noise-free readings at every sample; NaN from the stop on.
+    pub outputs: Vec<Outputs>,
+    /// The stop, if any: the time of the first NaN sample and [`Simulator::diverged`]'s
+    /// message.
+    pub stop: Option<Stop>,
+}
+
+/// Where and why a run stopped.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Stop {
+    pub time_s: f64,
+    pub reason: String,
+}
+
 /// Simulate a sampled record: `inputs[k]` at `t_k = k / sample_rate`, optional sensor
 /// noise per sample (held over the sample interval, inside the loop). Returns the
 /// noise-free readings at every sample; `valve_command` is what the controller sent,
-/// i.e. computed on the noisy feedback. A run that diverges ([`Simulator::diverged`])
-/// stops there: every later sample is NaN, so no caller takes it for a response (see
-/// [`first_divergence`] for the message).
+/// i.e. computed on the noisy feedback. A run that leaves the envelope or diverges
+/// ([`Simulator::diverged`]) stops there: every later sample is NaN, so no caller takes
+/// it for a response ([`simulate_run`] also says why).
 pub fn simulate_record(
     model: &Model,
     inputs: &[Inputs],
@@ -258,6 +279,17 @@ pub fn simulate_record(
     noise: Option<&[SensorNoise]>,
     max_substep_s: f64,
 ) -> Vec<Outputs> {
+    simulate_run(model, inputs, sample_rate_hz, noise, max_substep_s).outputs
+}
+
+/// [`simulate_record`] with the reason of a stop.
+pub fn simulate_run(
+    model: &Model,
+    inputs: &[Inputs],
+    sample_rate_hz: f64,
+    noise: Option<&[SensorNoise]>,
+    max_substep_s: f64,
+) -> Run {
     let mut sim = Simulator::new(model.clone(), 0.0, max_substep_s);
     let dt = 1.0 / sample_rate_hz;
     let zero = SensorNoise::default();
@@ -269,13 +301,23 @@ pub fn simulate_record(
             sim.advance(dt, &inputs[k], &inputs[k + 1], nk);
             // keep sample times exact (no drift from repeated addition)
             sim.time_s = (k + 1) as f64 * dt;
-            if sim.diverged().is_some() {
+            if let Some(reason) = sim.diverged() {
                 out.resize(inputs.len(), DIVERGED);
-                break;
+                let stop = Stop {
+                    time_s: sim.time_s,
+                    reason,
+                };
+                return Run {
+                    outputs: out,
+                    stop: Some(stop),
+                };
             }
         }
     }
-    out
+    Run {
+        outputs: out,
+        stop: None,
+    }
 }
 
 /// What [`simulate_record`] writes for the samples after a divergence.
@@ -295,15 +337,4 @@ pub fn first_divergence(out: &[Outputs], sample_rate_hz: f64) -> Option<f64> {
     out.iter()
         .position(|o| o.displacement_m.is_nan())
         .map(|k| k as f64 / sample_rate_hz)
-}
-
-/// What a caller of [`simulate_record`] reports for a run [`first_divergence`] found
-/// diverged at `t_s` (the simulate command, the synthesiser).
-pub fn divergence_message(t_s: f64) -> String {
-    format!(
-        "the simulation diverged at t = {t_s} s (the table outran {DIVERGED_SPEED_FACTOR} \
-         times its valve's full-opening speed Kq/A, or the state became non-finite): the \
-         parameters make the run unstable (the control loop, or the integration at this \
-         sub-step)"
-    )
 }

@@ -30,6 +30,13 @@ impl Geometry {
             flow_gain_m3_s: p.actuator.flow_gain_m3_s,
         }
     }
+    /// Put this geometry into `p`'s actuator block (the inverse of [`Self::from_params`]).
+    pub fn apply_to(&self, p: &mut Params) {
+        p.actuator.piston_area_m2 = self.piston_area_m2;
+        p.actuator.total_oil_volume_m3 = self.total_oil_volume_m3;
+        p.actuator.supply_pressure_pa = self.supply_pressure_pa;
+        p.actuator.flow_gain_m3_s = self.flow_gain_m3_s;
+    }
 }
 
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]

@@ -29,7 +29,7 @@ use super::{
 };
 use crate::model::{Inputs, Model, Outputs, Reference, SensorNoise};
 use crate::params::Params;
-use crate::solver::{divergence_message, first_divergence, simulate_record, DEFAULT_MAX_SUBSTEP_S};
+use crate::solver::{simulate_run, DEFAULT_MAX_SUBSTEP_S};
 use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;
 use rand_distr::{Distribution, Normal};
@@ -622,13 +622,14 @@ pub fn synthesise_test(
     p.controller = spec.controller.apply(&params.controller);
     let model = Model::new(&p);
     let noise_arg = if nl.is_none() { None } else { Some(&noise[..]) };
-    let truth = simulate_record(&model, &inputs, fs, noise_arg, opts.max_substep_s);
-    if let Some(t) = first_divergence(&truth, fs) {
+    let run = simulate_run(&model, &inputs, fs, noise_arg, opts.max_substep_s);
+    if let Some(stop) = run.stop {
         return Err(SynthError::BadTest {
             name: spec.name.clone(),
-            message: divergence_message(t),
+            message: stop.reason,
         });
     }
+    let truth = run.outputs;
     let rec = Record {
         time_s: (0..n).map(|k| k as f64 / fs).collect(),
         ref_displacement_m: r.displacement_m,

@@ -9,6 +9,7 @@ pub mod actuator;
 pub mod controller;
 pub mod effects;
 pub mod friction;
+pub mod limits;
 pub mod payload;
 pub mod servovalve;
 

@@ -113,6 +113,7 @@ fn run_synth(a: SynthArgs) -> anyhow::Result<()> {
     };
     opts.validate()?;
     guard_out_dir(&a.out_dir, a.force)?;
+    warn_if_unstable(&params, &synth::selected_program(&opts), "");
     let program = synth::selected_program(&opts);
     let table_s: f64 = program
         .iter()
@@ -221,5 +222,35 @@ fn run_check(a: CheckArgs) -> anyhow::Result<()> {
         "{} tests, {total} s of table time: every rule of the format holds",
         c.records.len()
     );
+    let mut p = shaketable::Params::trees_lab();
+    c.info.geometry.apply_to(&mut p);
+    p.controller = c.info.controller;
+    let tests: Vec<_> = c.info.tests.iter().cloned().enumerate().collect();
+    warn_if_unstable(
+        &p,
+        &tests,
+        " (with the campaign's geometry and gains, the rest at the TREES Lab defaults)",
+    );
     Ok(())
+}
+
+/// Warn of each test whose controller (the base gains of `p` with the test's override)
+/// makes the closed loop unstable at rest (spec section 8); `context` says with what.
+fn warn_if_unstable(
+    p: &shaketable::Params,
+    tests: &[(usize, shaketable::campaign::TestSpec)],
+    context: &str,
+) {
+    let mut seen = Vec::new();
+    for (_, t) in tests {
+        let mut q = *p;
+        q.controller = t.controller.apply(&p.controller);
+        if seen.contains(&q.controller) {
+            continue;
+        }
+        seen.push(q.controller);
+        if let Some(w) = shaketable::linear::stability_warning(&q) {
+            eprintln!("warning: test {}{context}: {w}", t.name);
+        }
+    }
 }

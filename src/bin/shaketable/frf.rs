@@ -3,7 +3,7 @@
 //! four transfer functions, a Bode PNG of the table TF and a JSON of the figures.
 
 use anyhow::Context;
-use shaketable::linear::{log_grid, Linearisation, OilColumn, TfFigures};
+use shaketable::linear::{log_grid, Linearisation, OilColumn, Pole, TfFigures};
 use shaketable::report::plot::{bode_png, BodeCurve};
 use std::io::Write;
 use std::path::PathBuf;
@@ -28,14 +28,6 @@ pub struct Args {
 }
 
 #[derive(serde::Serialize)]
-struct Pole {
-    frequency_hz: f64,
-    damping_ratio: f64,
-    re: f64,
-    im: f64,
-}
-
-#[derive(serde::Serialize)]
 struct Figures {
     table_tf: TfFigures,
     oil_column: OilColumn,
@@ -56,25 +48,14 @@ pub fn run(args: Args) -> anyhow::Result<()> {
     }
     let p = crate::load_params(args.params.as_deref())?;
     let lin = Linearisation::new(&p);
+    if let Some(w) = shaketable::linear::stability_warning(&p) {
+        eprintln!("warning: {w}");
+    }
     let fig = lin
         .table_tf_figures()
         .context("the table TF has no peak between 0.5 and 50 Hz with +-1 Hz around it")?;
     let oil = OilColumn::of(&p);
-    let poles: Vec<Pole> = lin
-        .poles()
-        .into_iter()
-        .filter(|q| q.im >= 0.0)
-        .map(|q| Pole {
-            frequency_hz: q.norm() / (2.0 * std::f64::consts::PI),
-            damping_ratio: if q.norm() > 0.0 {
-                -q.re / q.norm()
-            } else {
-                1.0
-            },
-            re: q.re,
-            im: q.im,
-        })
-        .collect();
+    let poles = lin.upper_poles();
     let source = args
         .params
         .as_ref()

@@ -10,9 +10,9 @@
 use anyhow::Context;
 use shaketable::campaign::format::{read_campaign_info, read_reference, write_record};
 use shaketable::campaign::{CampaignInfo, Record, TestSpec};
+use shaketable::solver::simulate_run;
 use shaketable::solver::DEFAULT_MAX_SUBSTEP_S;
-use shaketable::solver::{divergence_message, first_divergence};
-use shaketable::{simulate_record, Model};
+use shaketable::Model;
 use std::path::{Path, PathBuf};
 
 #[derive(clap::Args)]
@@ -133,15 +133,15 @@ pub fn run(a: Args) -> anyhow::Result<()> {
     }
     let reference = read_reference(&a.reference, fs)?;
     let fs = reference.sample_rate_hz;
-    let model = Model::new(&params);
-    let out = simulate_record(&model, &reference.inputs(), fs, None, a.max_substep);
-    if let Some(t) = first_divergence(&out, fs) {
-        anyhow::bail!(
-            "simulating {}: {}",
-            a.reference.display(),
-            divergence_message(t)
-        );
+    if let Some(w) = shaketable::linear::stability_warning(&params) {
+        eprintln!("warning: {w}");
     }
+    let model = Model::new(&params);
+    let run = simulate_run(&model, &reference.inputs(), fs, None, a.max_substep);
+    if let Some(stop) = run.stop {
+        anyhow::bail!("simulating {}: {}", a.reference.display(), stop.reason);
+    }
+    let out = run.outputs;
     let col = |f: fn(&shaketable::Outputs) -> f64| out.iter().map(f).collect::<Vec<f64>>();
     let record = Record {
         time_s: reference.time_s.clone(),
