@@ -81,6 +81,22 @@ pub struct Simulator {
     pub time_s: f64,
     pub history: CommandHistory,
     pub max_substep_s: f64,
+    /// What [`Simulator::diverged`] checks.
+    pub checks: Checks,
+}
+
+/// What stops a run ([`Simulator::diverged`]).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+pub enum Checks {
+    /// The operating envelope (spec section 8) and the numerical guards: every run a
+    /// user sees (simulate, synth, the FMU).
+    #[default]
+    Envelope,
+    /// Only a non-finite state and the [`DIVERGED_SPEED_FACTOR`] guard: for the
+    /// diagnosis' output-error fits, whose trial models may pass the envelope on their way
+    /// to the data (an optimiser needs a finite cost there); their results are held to
+    /// the envelope when they are scored.
+    DivergenceOnly,
 }
 
 /// Linear interpolation of the inputs at fraction `w` of the interval.
@@ -107,6 +123,7 @@ impl Simulator {
             time_s: start_s,
             history: CommandHistory::default(),
             max_substep_s,
+            checks: Checks::Envelope,
         }
     }
 
@@ -151,7 +168,15 @@ impl Simulator {
     /// meaningless state.
     pub fn diverged(&self) -> Option<String> {
         let t = self.time_s;
-        if let Some(e) = crate::model::limits::check(&self.model.params, &self.state) {
+        let limit = match self.checks {
+            Checks::Envelope => crate::model::limits::check(&self.model.params, &self.state),
+            Checks::DivergenceOnly => self
+                .state
+                .iter()
+                .any(|x| !x.is_finite())
+                .then_some(crate::model::limits::Exceeded::NonFinite),
+        };
+        if let Some(e) = limit {
             return Some(match e {
                 crate::model::limits::Exceeded::NonFinite => format!("at t = {t} s: {e}"),
                 _ => format!("the run left the table's operating envelope at t = {t} s: {e}"),
@@ -290,7 +315,27 @@ pub fn simulate_run(
     noise: Option<&[SensorNoise]>,
     max_substep_s: f64,
 ) -> Run {
+    simulate_run_with(
+        model,
+        inputs,
+        sample_rate_hz,
+        noise,
+        max_substep_s,
+        Checks::Envelope,
+    )
+}
+
+/// [`simulate_run`] stopping on `checks` only.
+pub fn simulate_run_with(
+    model: &Model,
+    inputs: &[Inputs],
+    sample_rate_hz: f64,
+    noise: Option<&[SensorNoise]>,
+    max_substep_s: f64,
+    checks: Checks,
+) -> Run {
     let mut sim = Simulator::new(model.clone(), 0.0, max_substep_s);
+    sim.checks = checks;
     let dt = 1.0 / sample_rate_hz;
     let zero = SensorNoise::default();
     let mut out = Vec::with_capacity(inputs.len());

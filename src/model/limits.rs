@@ -2,7 +2,7 @@
 //! has no end stops or relief valves, so a state beyond it describes nothing real and
 //! the run must stop with the time and the limit.
 
-use super::{ix, State};
+use super::{ix, Outputs, State};
 use crate::params::{ActuatorModel, Params};
 
 /// The LVDT displacement may reach this many strokes before the run stops (spec 8).
@@ -76,19 +76,66 @@ pub fn check(p: &Params, state: &State) -> Option<Exceeded> {
     if state.iter().any(|x| !x.is_finite()) {
         return Some(Exceeded::NonFinite);
     }
+    let (pa, pb) = match p.actuator.model {
+        // P_L as the chamber difference, centred on P_s/2 as Hydraulics does
+        ActuatorModel::Ideal => {
+            let ps = p.actuator.supply_pressure_pa;
+            (0.5 * (ps + state[ix::PA]), 0.5 * (ps - state[ix::PA]))
+        }
+        ActuatorModel::Nonlinear => (state[ix::PA], state[ix::PB]),
+    };
+    let reading = Reading {
+        displacement_m: state[ix::X] - state[ix::XF],
+        velocity_m_s: state[ix::V] - state[ix::VF],
+        pressure_a_pa: pa,
+        pressure_b_pa: pb,
+    };
+    check_reading(p, &reading)
+}
+
+/// What the limits are checked on: the LVDT displacement, the speed relative to the
+/// reaction mass and the chamber pressures (for the ideal actuator `P_a - P_b = P_L`).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Reading {
+    pub displacement_m: f64,
+    pub velocity_m_s: f64,
+    pub pressure_a_pa: f64,
+    pub pressure_b_pa: f64,
+}
+
+impl From<&Outputs> for Reading {
+    fn from(o: &Outputs) -> Reading {
+        Reading {
+            displacement_m: o.displacement_m,
+            velocity_m_s: o.velocity_m_s,
+            pressure_a_pa: o.pressure_a_pa,
+            pressure_b_pa: o.pressure_b_pa,
+        }
+    }
+}
+
+/// [`check`] on a [`Reading`] (a simulated sample's outputs, say).
+pub fn check_reading(p: &Params, r: &Reading) -> Option<Exceeded> {
+    let values = [
+        r.displacement_m,
+        r.velocity_m_s,
+        r.pressure_a_pa,
+        r.pressure_b_pa,
+    ];
+    if values.iter().any(|x| !x.is_finite()) {
+        return Some(Exceeded::NonFinite);
+    }
     let stroke = STROKE_FACTOR * p.limits.stroke_m;
-    let x = state[ix::X] - state[ix::XF];
-    if x.abs() > stroke {
+    if r.displacement_m.abs() > stroke {
         return Some(Exceeded::Stroke {
-            displacement_m: x,
+            displacement_m: r.displacement_m,
             limit_m: stroke,
         });
     }
     let speed = VELOCITY_FACTOR * p.limits.velocity_m_s;
-    let v = state[ix::V] - state[ix::VF];
-    if v.abs() > speed {
+    if r.velocity_m_s.abs() > speed {
         return Some(Exceeded::Velocity {
-            velocity_m_s: v,
+            velocity_m_s: r.velocity_m_s,
             limit_m_s: speed,
         });
     }
@@ -103,13 +150,25 @@ pub fn check(p: &Params, state: &State) -> Option<Exceeded> {
         })
     };
     match p.actuator.model {
-        ActuatorModel::Ideal => outside("load pressure P_L", state[ix::PA], -high),
+        ActuatorModel::Ideal => outside(
+            "load pressure P_L",
+            r.pressure_a_pa - r.pressure_b_pa,
+            -high,
+        ),
         ActuatorModel::Nonlinear => {
             let low = PRESSURE_LOW_FACTOR * ps;
-            outside("chamber pressure P_a", state[ix::PA], low)
-                .or_else(|| outside("chamber pressure P_b", state[ix::PB], low))
+            outside("chamber pressure P_a", r.pressure_a_pa, low)
+                .or_else(|| outside("chamber pressure P_b", r.pressure_b_pa, low))
         }
     }
+}
+
+/// The first sample of a simulated record outside the envelope: its index and the limit.
+pub fn first_exceeded(p: &Params, outputs: &[Outputs]) -> Option<(usize, Exceeded)> {
+    outputs
+        .iter()
+        .enumerate()
+        .find_map(|(k, o)| check_reading(p, &Reading::from(o)).map(|e| (k, e)))
 }
 
 #[cfg(test)]
