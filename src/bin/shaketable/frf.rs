@@ -4,6 +4,7 @@
 
 use anyhow::Context;
 use shaketable::linear::{log_grid, Linearisation, OilColumn, TfFigures};
+use shaketable::output::{self, Inputs};
 use shaketable::report::plot::{bode_png, BodeCurve};
 use std::io::Write;
 use std::path::PathBuf;
@@ -16,6 +17,10 @@ pub struct Args {
     /// Directory for frf.csv, bode.png and figures.json (created); print only when omitted.
     #[arg(long)]
     out: Option<PathBuf>,
+    /// Write into --out even if it is not empty and not made by `frf` (same-named files
+    /// are replaced, others kept; never an input or a symlink).
+    #[arg(long)]
+    force: bool,
     /// Lowest frequency of the CSV and plot, Hz.
     #[arg(long, default_value_t = 0.1)]
     f_min: f64,
@@ -51,9 +56,21 @@ pub fn run(args: Args) -> anyhow::Result<()> {
             args.f_max
         );
     }
-    if args.points < 10 {
-        anyhow::bail!("--points must be at least 10 (got {})", args.points);
+    crate::limits::within(
+        "--points",
+        args.points,
+        10,
+        crate::limits::MAX_FRF_POINTS,
+        "MAX_FRF_POINTS",
+    )?;
+    let mut inputs = Inputs::new();
+    if let Some(p) = &args.params {
+        inputs.add(p);
     }
+    let plan = match &args.out {
+        Some(dir) => Some(output::plan_dir(dir, "frf", args.force, &inputs)?),
+        None => None,
+    };
     let p = crate::load_params(args.params.as_deref())?;
     let lin = Linearisation::new(&p);
     let fig = lin
@@ -117,8 +134,9 @@ pub fn run(args: Args) -> anyhow::Result<()> {
     for n in &lin.notes {
         println!("note: {n}");
     }
-    let Some(out) = args.out else { return Ok(()) };
-    std::fs::create_dir_all(&out).with_context(|| format!("cannot create {}", out.display()))?;
+    let Some(plan) = plan else { return Ok(()) };
+    let staging = plan.stage()?;
+    let out = staging.path().to_path_buf();
     let grid = log_grid(args.f_min, args.f_max, args.points);
     let table = lin.sample(&grid, Linearisation::table_tf);
     let spool = lin.sample(&grid, Linearisation::command_to_spool);
@@ -185,11 +203,14 @@ pub fn run(args: Args) -> anyhow::Result<()> {
         notes: lin.notes.clone(),
     };
     writeln!(f, "{}", serde_json::to_string_pretty(&figures)?)?;
+    drop(f);
+    staging.commit()?;
+    let dir = plan.target();
     println!(
         "wrote {}, {}, {}",
-        csv_path.display(),
-        png.display(),
-        json_path.display()
+        dir.join("frf.csv").display(),
+        dir.join("bode.png").display(),
+        dir.join("figures.json").display()
     );
     Ok(())
 }

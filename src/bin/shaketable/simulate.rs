@@ -7,9 +7,10 @@
 //! next to the CSV when it lists that file; `--no-campaign` ignores both. The sample
 //! rate is `--sample-rate`, else the campaign's, else inferred from the time column.
 
-use anyhow::Context;
-use shaketable::campaign::format::{read_campaign_info, read_reference, write_record};
+use indicatif::{ProgressBar, ProgressStyle};
+use shaketable::campaign::format::{read_campaign_info, read_reference, record_to_csv};
 use shaketable::campaign::{CampaignInfo, Record, TestSpec};
+use shaketable::output::{self, Inputs};
 use shaketable::solver::DEFAULT_MAX_SUBSTEP_S;
 use shaketable::solver::{divergence_message, first_divergence};
 use shaketable::{simulate_record, Model};
@@ -42,6 +43,9 @@ pub struct Args {
     /// Largest solver sub-step, s.
     #[arg(long, default_value_t = DEFAULT_MAX_SUBSTEP_S, value_name = "S")]
     max_substep: f64,
+    /// Replace --out if it exists (never an input of this run, never through a symlink).
+    #[arg(long)]
+    force: bool,
 }
 
 /// The campaign test that records `reference`, if any.
@@ -52,6 +56,42 @@ fn find_test<'a>(info: &'a CampaignInfo, dir: &Path, reference: &Path) -> Option
         .find(|t| dir.join(&t.file).canonicalize().ok().as_ref() == Some(&target))
 }
 
+/// The numeric options that size run time, within their limits.
+fn check_limits(a: &Args) -> anyhow::Result<()> {
+    use crate::limits::{at_least, within, MAX_SAMPLE_RATE_HZ, MIN_SUBSTEP_S};
+    if let Some(fs) = a.sample_rate {
+        within(
+            "--sample-rate",
+            fs,
+            f64::MIN_POSITIVE,
+            MAX_SAMPLE_RATE_HZ,
+            "Hz; MAX_SAMPLE_RATE_HZ",
+        )?;
+    }
+    at_least(
+        "--max-substep",
+        a.max_substep,
+        MIN_SUBSTEP_S,
+        "s; MIN_SUBSTEP_S",
+    )
+}
+
+/// A spinner with the elapsed time on stderr while simulating (hidden when stderr is not
+/// a terminal).
+fn spinner(samples: usize, fs: f64) -> ProgressBar {
+    let b = ProgressBar::new_spinner();
+    b.set_style(
+        ProgressStyle::with_template("{spinner} {msg} ({elapsed})")
+            .unwrap_or_else(|_| ProgressStyle::default_spinner()),
+    );
+    b.set_message(format!(
+        "simulating {samples} samples ({:.1} s of table time)",
+        samples as f64 / fs
+    ));
+    b.enable_steady_tick(std::time::Duration::from_millis(200));
+    b
+}
+
 pub fn run(a: Args) -> anyhow::Result<()> {
     let mut params = crate::load_params(a.params.as_deref())?;
     for e in &a.effects {
@@ -59,17 +99,7 @@ pub fn run(a: Args) -> anyhow::Result<()> {
             .apply_effect_spec(e)
             .map_err(|m| anyhow::anyhow!("--effect {e}: {m}"))?;
     }
-    if let Some(fs) = a.sample_rate {
-        anyhow::ensure!(
-            fs.is_finite() && fs > 0.0,
-            "--sample-rate {fs}: must be > 0"
-        );
-    }
-    anyhow::ensure!(
-        a.max_substep.is_finite() && a.max_substep > 0.0,
-        "--max-substep {}: must be > 0",
-        a.max_substep
-    );
+    check_limits(&a)?;
     // the campaign the reference belongs to
     let campaign: Option<(PathBuf, CampaignInfo)> = if a.no_campaign {
         None
@@ -131,10 +161,25 @@ pub fn run(a: Args) -> anyhow::Result<()> {
             None => {}
         }
     }
+    // the output is checked before the simulation: never the reference, never a symlink
+    let mut inputs = Inputs::new();
+    inputs.add(&a.reference);
+    for p in a.params.iter() {
+        inputs.add(p);
+    }
+    if let Some((dir, info)) = &campaign {
+        inputs.add(&dir.join("campaign.toml"));
+        for t in &info.tests {
+            inputs.add(&dir.join(&t.file));
+        }
+    }
+    output::check_file(&a.out, a.force, &inputs)?;
     let reference = read_reference(&a.reference, fs)?;
     let fs = reference.sample_rate_hz;
     let model = Model::new(&params);
+    let bar = spinner(reference.time_s.len(), fs);
     let out = simulate_record(&model, &reference.inputs(), fs, None, a.max_substep);
+    bar.finish_and_clear();
     if let Some(t) = first_divergence(&out, fs) {
         anyhow::bail!(
             "simulating {}: {}",
@@ -159,11 +204,8 @@ pub fn run(a: Args) -> anyhow::Result<()> {
             ("pressure_b_pa".to_string(), col(|o| o.pressure_b_pa)),
         ],
     };
-    if let Some(parent) = a.out.parent().filter(|p| !p.as_os_str().is_empty()) {
-        std::fs::create_dir_all(parent)
-            .with_context(|| format!("cannot create {}", parent.display()))?;
-    }
-    write_record(&record, &a.out)?;
+    let bytes = record_to_csv(&record, &a.out.display().to_string())?;
+    output::write_file(&a.out, &bytes, a.force, &inputs)?;
     eprintln!(
         "simulated {} samples ({} s at {fs} Hz), wrote {}",
         record.len(),
