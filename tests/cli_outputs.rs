@@ -150,12 +150,16 @@ fn report_folders_of_others_need_force_and_errors_name_the_path() {
     fs::write(r.join("thesis.tex"), "mine").unwrap();
     let o = shaketable(&["identify", s(&c), "--report", s(&r)]);
     refused(&o, &[s(&r), "--force"]);
-    // our own report is replaced without --force; with --force the user's file stays
+    // our own report (with the JSON inside it) is replaced without --force
     let mine = t.path().join("ours");
+    fs::create_dir(&mine).unwrap();
+    let json = mine.join("id.json");
     for _ in 0..2 {
-        let o = shaketable(&["identify", s(&c), "--report", s(&mine)]);
+        let o = shaketable(&["identify", s(&c), "--json", s(&json), "--report", s(&mine)]);
         assert!(o.status.success(), "{}", stderr(&o));
+        assert!(json.exists() && mine.join("index.html").exists());
     }
+    // with --force into someone else's folder, the user's file stays
     let o = shaketable(&["identify", s(&c), "--report", s(&r), "--force"]);
     assert!(o.status.success(), "{}", stderr(&o));
     assert_eq!(fs::read_to_string(r.join("thesis.tex")).unwrap(), "mine");

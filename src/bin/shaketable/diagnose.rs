@@ -126,8 +126,10 @@ pub fn run(args: Args) -> anyhow::Result<()> {
     if let Some(note) = d.structure_change() {
         println!("{note}");
     }
-    outputs.json(&(serde_json::to_string_pretty(&j)? + "\n"))?;
-    outputs.params(&d.extended.to_toml_string())?;
-    outputs.report(|dir| shaketable::report::diagnose::write(dir, &campaign, &d))?;
+    outputs.write(
+        &(serde_json::to_string_pretty(&j)? + "\n"),
+        &d.extended.to_toml_string(),
+        |dir| shaketable::report::diagnose::write(dir, &campaign, &d),
+    )?;
     Ok(())
 }

@@ -65,8 +65,10 @@ pub fn run(args: Args) -> anyhow::Result<()> {
     for m in &id.missing {
         println!("not identified: {m}");
     }
-    outputs.json(&(serde_json::to_string_pretty(&id.to_json())? + "\n"))?;
-    outputs.params(&id.params.to_toml_string())?;
-    outputs.report(|dir| shaketable::report::identify::write(dir, &id, &rows, truth.is_some()))?;
+    outputs.write(
+        &(serde_json::to_string_pretty(&id.to_json())? + "\n"),
+        &id.params.to_toml_string(),
+        |dir| shaketable::report::identify::write(dir, &id, &rows, truth.is_some()),
+    )?;
     Ok(())
 }

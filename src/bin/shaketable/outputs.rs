@@ -38,7 +38,10 @@ impl Outputs {
         let files: Vec<&Path> = json.iter().chain(params_out.iter()).copied().collect();
         output::check_distinct(&files)?;
         for f in &files {
-            output::check_file(f, force, &inputs)?;
+            // a file inside the report folder is part of the report (checked with it)
+            if !report.is_some_and(|r| in_folder(f, r)) {
+                output::check_file(f, force, &inputs)?;
+            }
         }
         let report = match report {
             Some(dir) => Some(
@@ -56,26 +59,27 @@ impl Outputs {
         })
     }
 
-    fn write(&self, path: &Option<PathBuf>, text: &str) -> anyhow::Result<()> {
-        if let Some(p) = path {
-            output::write_file(p, text.as_bytes(), self.force, &self.inputs)?;
-            println!("wrote {}", p.display());
+    /// Write the JSON text (for `--json`), the parameter file (for `--params-out`) and the
+    /// report (`--report`, built by `build` in a temporary folder, then put in place).
+    /// JSON and parameter files inside the report folder are written with the report.
+    pub fn write(
+        &self,
+        json: &str,
+        params: &str,
+        build: impl FnOnce(&Path) -> anyhow::Result<()>,
+    ) -> anyhow::Result<()> {
+        let files = [(&self.json, json), (&self.params_out, params)];
+        let mut with_report = Vec::new();
+        for (path, text) in files {
+            let Some(p) = path else { continue };
+            match &self.report {
+                Some(r) if in_folder(p, r.target()) => with_report.push((p, text)),
+                _ => {
+                    output::write_file(p, text.as_bytes(), self.force, &self.inputs)?;
+                    println!("wrote {}", p.display());
+                }
+            }
         }
-        Ok(())
-    }
-
-    /// Write the JSON text (if `--json`).
-    pub fn json(&self, text: &str) -> anyhow::Result<()> {
-        self.write(&self.json, text)
-    }
-
-    /// Write the parameter file text (if `--params-out`).
-    pub fn params(&self, text: &str) -> anyhow::Result<()> {
-        self.write(&self.params_out, text)
-    }
-
-    /// Build the report (if `--report`) in a temporary folder, then put it in place.
-    pub fn report(&self, build: impl FnOnce(&Path) -> anyhow::Result<()>) -> anyhow::Result<()> {
         let Some(plan) = &self.report else {
             return Ok(());
         };
@@ -83,8 +87,21 @@ impl Outputs {
         let context = || format!("writing the report {}", dir.display());
         let staging = plan.stage().with_context(context)?;
         build(staging.path()).with_context(context)?;
+        for (p, text) in &with_report {
+            let name = p.file_name().unwrap_or_default();
+            output::atomic_write(&staging.path().join(name), text.as_bytes())?;
+        }
         staging.commit().with_context(context)?;
+        for (p, _) in &with_report {
+            println!("wrote {}", p.display());
+        }
         println!("wrote {}", dir.join("index.html").display());
         Ok(())
     }
+}
+
+/// Whether `file` names an entry directly inside `folder` (lexically, made absolute).
+fn in_folder(file: &Path, folder: &Path) -> bool {
+    let abs = |p: &Path| std::path::absolute(p).unwrap_or_else(|_| p.to_path_buf());
+    file.parent().map(abs) == Some(abs(folder)) && file.file_name().is_some()
 }
