@@ -194,13 +194,13 @@ fn parent_of(path: &Path) -> Option<&Path> {
 
 static COUNTER: AtomicU64 = AtomicU64::new(0);
 
-/// A fresh name `.NAME.tmp-PID-N` next to `path`.
+/// A fresh name `.WHAT-PID-N.NAME` next to `path` (hidden; the extension kept for
+/// writers that pick the format by it).
 fn temp_sibling(path: &Path, what: &str) -> PathBuf {
     let name = path.file_name().map(OsString::from).unwrap_or_default();
     let n = COUNTER.fetch_add(1, Ordering::Relaxed);
-    let mut t = OsString::from(".");
+    let mut t = OsString::from(format!(".{what}-{}-{n}.", std::process::id()));
     t.push(&name);
-    t.push(format!(".{what}-{}-{n}", std::process::id()));
     match parent_of(path) {
         Some(p) => p.join(t),
         None => PathBuf::from(t),
@@ -251,6 +251,33 @@ pub fn atomic_write(path: &Path, bytes: &[u8]) -> Result<(), OutputError> {
         return Err(io(path)(e));
     }
     Ok(())
+}
+
+/// Let `write` fill a new, empty temporary sibling of `path` (created without following
+/// symlinks), then rename it onto `path`: for writers that want a path (PNG encoders).
+/// `wrap` turns a refusal or an OS error into the writer's error type.
+pub fn write_via_temp<E>(
+    path: &Path,
+    write: impl FnOnce(&Path) -> Result<(), E>,
+    wrap: impl Fn(OutputError) -> E,
+) -> Result<(), E> {
+    if std::fs::symlink_metadata(path).is_ok_and(|m| m.file_type().is_symlink()) {
+        return Err(wrap(OutputError::Symlink { path: show(path) }));
+    }
+    let tmp = loop {
+        let t = temp_sibling(path, "tmp");
+        match create_new(&t) {
+            Ok(_) => break t,
+            Err(e) if e.kind() == std::io::ErrorKind::AlreadyExists => continue,
+            Err(e) => return Err(wrap(io(path)(e))),
+        }
+    };
+    let result =
+        write(&tmp).and_then(|_| std::fs::rename(&tmp, path).map_err(|e| wrap(io(path)(e))));
+    if result.is_err() {
+        let _ = std::fs::remove_file(&tmp);
+    }
+    result
 }
 
 /// How an output folder will be put in place.

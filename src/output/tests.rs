@@ -138,3 +138,35 @@ fn the_same_output_twice_is_refused() {
     assert!(check_distinct(&[a, Path::new("x/../x/out.json"), a]).is_err());
     assert!(check_distinct(&[a, Path::new("y.json")]).is_ok());
 }
+
+#[cfg(unix)]
+#[test]
+fn write_via_temp_keeps_the_extension_and_refuses_symlinks() {
+    let d = tmp();
+    let p = d.path().join("fig.png");
+    write_via_temp(
+        &p,
+        |t| {
+            assert_eq!(t.extension().unwrap(), "png");
+            fs::write(t, "png").map_err(|e| e.to_string())
+        },
+        |e| e.to_string(),
+    )
+    .unwrap();
+    assert_eq!(fs::read_to_string(&p).unwrap(), "png");
+    let victim = d.path().join("victim");
+    fs::write(&victim, "keep").unwrap();
+    let link = d.path().join("link.png");
+    std::os::unix::fs::symlink(&victim, &link).unwrap();
+    let r = write_via_temp(
+        &link,
+        |t| fs::write(t, "x").map_err(|e| e.to_string()),
+        |e| e.to_string(),
+    );
+    assert!(r.is_err());
+    assert_eq!(fs::read_to_string(&victim).unwrap(), "keep");
+    // a failing writer leaves nothing behind
+    let q = d.path().join("bad.png");
+    assert!(write_via_temp(&q, |_| Err("no".to_string()), |e| e.to_string()).is_err());
+    assert_eq!(fs::read_dir(d.path()).unwrap().count(), 3);
+}
