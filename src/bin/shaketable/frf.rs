@@ -6,7 +6,6 @@ use anyhow::Context;
 use shaketable::linear::{log_grid, Linearisation, OilColumn, TfFigures};
 use shaketable::output::{self, Inputs};
 use shaketable::report::plot::{bode_png, BodeCurve};
-use std::io::Write;
 use std::path::PathBuf;
 
 #[derive(clap::Args)]
@@ -135,16 +134,41 @@ pub fn run(args: Args) -> anyhow::Result<()> {
         println!("note: {n}");
     }
     let Some(plan) = plan else { return Ok(()) };
+    let figures = Figures {
+        table_tf: fig,
+        oil_column: oil,
+        poles,
+        notes: lin.notes.clone(),
+    };
     let staging = plan.stage()?;
-    let out = staging.path().to_path_buf();
+    write_files(staging.path(), &args, &lin, &figures)
+        .with_context(|| format!("writing {}", plan.target().display()))?;
+    staging.commit()?;
+    let dir = plan.target();
+    println!(
+        "wrote {}, {}, {}",
+        dir.join("frf.csv").display(),
+        dir.join("bode.png").display(),
+        dir.join("figures.json").display()
+    );
+    Ok(())
+}
+
+/// frf.csv, bode.png and figures.json into `out` (a fresh folder).
+fn write_files(
+    out: &std::path::Path,
+    args: &Args,
+    lin: &Linearisation,
+    figures: &Figures,
+) -> anyhow::Result<()> {
+    let fig = &figures.table_tf;
     let grid = log_grid(args.f_min, args.f_max, args.points);
     let table = lin.sample(&grid, Linearisation::table_tf);
     let spool = lin.sample(&grid, Linearisation::command_to_spool);
     let force = lin.sample(&grid, Linearisation::spool_to_force);
     let mass = lin.sample(&grid, Linearisation::acceleration_to_force);
     let csv_path = out.join("frf.csv");
-    let mut w = csv::Writer::from_path(&csv_path)
-        .with_context(|| format!("cannot write {}", csv_path.display()))?;
+    let mut w = csv::Writer::from_writer(Vec::new());
     w.write_record([
         "frequency_hz",
         "table_gain",
@@ -176,7 +200,10 @@ pub fn run(args: Args) -> anyhow::Result<()> {
                 .map(|v| ryu::Buffer::new().format(*v).to_string()),
         )?;
     }
-    w.flush()?;
+    let bytes = w
+        .into_inner()
+        .map_err(|e| anyhow::anyhow!("{}", e.error()))?;
+    output::atomic_write(&csv_path, &bytes)?;
     let png = out.join("bode.png");
     bode_png(
         &png,
@@ -194,23 +221,7 @@ pub fn run(args: Args) -> anyhow::Result<()> {
         args.f_max,
     )?;
     let json_path = out.join("figures.json");
-    let mut f = std::fs::File::create(&json_path)
-        .with_context(|| format!("cannot write {}", json_path.display()))?;
-    let figures = Figures {
-        table_tf: fig,
-        oil_column: oil,
-        poles,
-        notes: lin.notes.clone(),
-    };
-    writeln!(f, "{}", serde_json::to_string_pretty(&figures)?)?;
-    drop(f);
-    staging.commit()?;
-    let dir = plan.target();
-    println!(
-        "wrote {}, {}, {}",
-        dir.join("frf.csv").display(),
-        dir.join("bode.png").display(),
-        dir.join("figures.json").display()
-    );
+    let text = serde_json::to_string_pretty(figures)? + "\n";
+    output::atomic_write(&json_path, text.as_bytes())?;
     Ok(())
 }

@@ -47,7 +47,9 @@ pub fn run(args: Args) -> anyhow::Result<()> {
         args.force,
         inputs,
     )?;
+    let bar = crate::spinner(format!("identifying {}", args.campaign.display()));
     let id = identify(&campaign);
+    bar.finish_and_clear();
     let truth = match &truth_path {
         Some(p) => Some(shaketable::Params::from_file(p)?),
         None => None,

@@ -95,3 +95,16 @@ pub fn load_params(path: Option<&std::path::Path>) -> anyhow::Result<shaketable:
         None => shaketable::Params::trees_lab(),
     })
 }
+
+/// A spinner with `message` and the elapsed time on stderr, for work without steps to
+/// count; hidden when stderr is not a terminal (indicatif's default target).
+pub fn spinner(message: String) -> indicatif::ProgressBar {
+    let b = indicatif::ProgressBar::new_spinner();
+    b.set_style(
+        indicatif::ProgressStyle::with_template("{spinner} {msg} ({elapsed})")
+            .unwrap_or_else(|_| indicatif::ProgressStyle::default_spinner()),
+    );
+    b.set_message(message);
+    b.enable_steady_tick(std::time::Duration::from_millis(200));
+    b
+}

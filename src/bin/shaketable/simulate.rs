@@ -7,7 +7,6 @@
 //! next to the CSV when it lists that file; `--no-campaign` ignores both. The sample
 //! rate is `--sample-rate`, else the campaign's, else inferred from the time column.
 
-use indicatif::{ProgressBar, ProgressStyle};
 use shaketable::campaign::format::{read_campaign_info, read_reference, record_to_csv};
 use shaketable::campaign::{CampaignInfo, Record, TestSpec};
 use shaketable::output::{self, Inputs};
@@ -74,22 +73,6 @@ fn check_limits(a: &Args) -> anyhow::Result<()> {
         MIN_SUBSTEP_S,
         "s; MIN_SUBSTEP_S",
     )
-}
-
-/// A spinner with the elapsed time on stderr while simulating (hidden when stderr is not
-/// a terminal).
-fn spinner(samples: usize, fs: f64) -> ProgressBar {
-    let b = ProgressBar::new_spinner();
-    b.set_style(
-        ProgressStyle::with_template("{spinner} {msg} ({elapsed})")
-            .unwrap_or_else(|_| ProgressStyle::default_spinner()),
-    );
-    b.set_message(format!(
-        "simulating {samples} samples ({:.1} s of table time)",
-        samples as f64 / fs
-    ));
-    b.enable_steady_tick(std::time::Duration::from_millis(200));
-    b
 }
 
 pub fn run(a: Args) -> anyhow::Result<()> {
@@ -177,7 +160,11 @@ pub fn run(a: Args) -> anyhow::Result<()> {
     let reference = read_reference(&a.reference, fs)?;
     let fs = reference.sample_rate_hz;
     let model = Model::new(&params);
-    let bar = spinner(reference.time_s.len(), fs);
+    let samples = reference.time_s.len();
+    let bar = crate::spinner(format!(
+        "simulating {samples} samples ({:.1} s of table time)",
+        samples as f64 / fs
+    ));
     let out = simulate_record(&model, &reference.inputs(), fs, None, a.max_substep);
     bar.finish_and_clear();
     if let Some(t) = first_divergence(&out, fs) {
