@@ -326,3 +326,34 @@ fn campaign_name_is_escaped_in_the_report() {
     assert!(!html.contains(evil), "live markup in the report");
     assert!(html.contains("&lt;img src=x onerror=alert(1)&gt;"));
 }
+
+/// Item 5 (second half): `simulate` shows its progress on a terminal, and nothing when
+/// stderr is a file or a pipe.
+#[test]
+fn simulate_shows_progress_only_on_a_terminal() {
+    let t = tempfile::tempdir().unwrap();
+    let c = t.path().join("c");
+    synth_ok(&c);
+    let r1 = c.join("R1.csv");
+    let out = t.path().join("a.csv");
+    let o = shaketable(&["simulate", "--reference", s(&r1), "--out", s(&out)]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    assert!(!stderr(&o).contains("simulating"), "{}", stderr(&o));
+    // on a pseudo-terminal (util-linux `script`), when available
+    let cmd = format!(
+        "{} simulate --reference {} --out {}",
+        env!("CARGO_BIN_EXE_shaketable"),
+        s(&r1),
+        s(&t.path().join("b.csv"))
+    );
+    let Ok(o) = Command::new("script")
+        .args(["-qec", &cmd, "/dev/null"])
+        .output()
+    else {
+        eprintln!("no `script`: the terminal half is skipped");
+        return;
+    };
+    assert!(o.status.success(), "{}", stderr(&o));
+    let all = String::from_utf8_lossy(&o.stdout);
+    assert!(all.contains("simulating"), "{all}");
+}
