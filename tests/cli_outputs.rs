@@ -319,12 +319,14 @@ fn campaign_name_is_escaped_in_the_report() {
     );
     assert!(text.contains(evil));
     fs::write(&toml, text).unwrap();
-    let r = t.path().join("r");
-    let o = shaketable(&["identify", s(&c), "--report", s(&r)]);
-    assert!(o.status.success(), "{}", stderr(&o));
-    let html = fs::read_to_string(r.join("index.html")).unwrap();
-    assert!(!html.contains(evil), "live markup in the report");
-    assert!(html.contains("&lt;img src=x onerror=alert(1)&gt;"));
+    for cmd in ["identify", "diagnose"] {
+        let r = t.path().join(cmd);
+        let o = shaketable(&[cmd, s(&c), "--report", s(&r)]);
+        assert!(o.status.success(), "{}", stderr(&o));
+        let html = fs::read_to_string(r.join("index.html")).unwrap();
+        assert!(!html.contains(evil), "live markup in the {cmd} report");
+        assert!(html.contains("&lt;img src=x onerror=alert(1)&gt;"), "{cmd}");
+    }
 }
 
 /// Item 5 (second half): `simulate` shows its progress on a terminal, and nothing when
