@@ -6,7 +6,7 @@ use crate::campaign::Campaign;
 use crate::diagnose::{measured, simulate_test, simulated, Diagnosis, Part, CHANNELS};
 use crate::identify::frf::{Welch, WelchOptions};
 use crate::report::plot::{bode_png, xy_png, BodeCurve, Series};
-use crate::report::{escape_html, safe_file_name};
+use crate::report::{escape_html, markdown_code, safe_file_name};
 use std::fmt::Write as _;
 use std::path::Path;
 
@@ -189,8 +189,10 @@ pub fn write(dir: &Path, c: &Campaign, d: &Diagnosis) -> anyhow::Result<()> {
     );
     let _ = writeln!(
         md,
-        "# Diagnosis of `{}`\n\n**Cause: {cause}**, gain {:.2}, explained: {}\n",
-        c.info.name, d.gain, d.explained
+        "# Diagnosis of {}\n\n**Cause: {cause}**, gain {:.2}, explained: {}\n",
+        markdown_code(&c.info.name),
+        d.gain,
+        d.explained
     );
     if let Some(s) = d.structure_change() {
         let _ = writeln!(md, "Note: {s}.\n");

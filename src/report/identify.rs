@@ -3,8 +3,8 @@
 
 use crate::identify::{FrfData, Identification};
 use crate::params::Params;
-use crate::report::escape_html;
 use crate::report::plot::{bode_png, xy_png, BodeCurve, Series};
+use crate::report::{escape_html, markdown_code};
 use num_complex::Complex64;
 use std::f64::consts::PI;
 use std::fmt::Write as _;
@@ -556,12 +556,12 @@ pub fn write(
     let _ = FrfData::default();
     // README.md
     let mut md = format!(
-        "# Identification of `{}`\n\n```\n{}```\n\n",
-        id.campaign,
+        "# Identification of {}\n\n```\n{}```\n\n",
+        markdown_code(&id.campaign),
         text_table(rows, with_truth)
     );
     for m in &id.missing {
-        let _ = writeln!(md, "- not identified: {m}");
+        let _ = writeln!(md, "- not identified: {}", escape_html(m));
     }
     let _ = writeln!(
         md,

@@ -23,6 +23,12 @@ pub fn escape_html(s: &str) -> String {
     out
 }
 
+/// `s` as a Markdown code span: a backtick in it (which would end the span and let the
+/// rest render as Markdown or HTML) becomes `'`.
+pub fn markdown_code(s: &str) -> String {
+    format!("`{}`", s.replace('`', "'"))
+}
+
 /// A file name made from user text (a test name): only ASCII letters, digits, `-`, `_`
 /// and `.` are kept, anything else (`/`, `..` separators, quotes, spaces) becomes `_`, so
 /// the file stays inside the report folder and its name is safe in a link.
@@ -52,5 +58,6 @@ mod tests {
         );
         assert_eq!(safe_file_name("../../etc/x\"y.png"), "_.._etc_x_y.png");
         assert_eq!(safe_file_name(".hidden"), "hidden");
+        assert_eq!(markdown_code("a`<b>"), "`a'<b>`");
     }
 }
