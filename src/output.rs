@@ -331,6 +331,13 @@ pub fn plan_dir(
     force: bool,
     inputs: &Inputs,
 ) -> Result<DirPlan, OutputError> {
+    // `.`, `..` or `/` name no folder to put beside: use the real path
+    let lexical: PathBuf = target.components().collect(); // drops `out/.`'s dot
+    let resolved = match lexical.file_name() {
+        Some(_) => lexical,
+        None => target.canonicalize().map_err(io(target))?,
+    };
+    let target = resolved.as_path();
     let plan = |kind| DirPlan {
         target: target.to_path_buf(),
         command: command.to_string(),
@@ -420,9 +427,15 @@ impl Staging {
     pub fn commit(mut self) -> Result<(), OutputError> {
         let p = self.plan.clone();
         let again = plan_dir(&p.target, &p.command, p.kind == DirKind::Merge, &p.inputs)?;
-        let names = self.names()?;
+        let mut names = self.names()?;
         match again.kind {
             DirKind::Merge => self.merge(&names)?,
+            DirKind::Fresh if p.target.exists() => {
+                // an empty folder (maybe the working folder): keep it, move the files in
+                self.write_marker(&names)?;
+                names.push(MARKER_FILE.into());
+                self.merge(&names)?;
+            }
             kind => {
                 self.write_marker(&names)?;
                 self.swap(kind)?;
@@ -450,13 +463,10 @@ impl Staging {
         atomic_write(&self.dir.join(MARKER_FILE), text.as_bytes())
     }
 
-    /// Fresh or Replace: rename the staged folder onto the target.
+    /// Fresh (no folder yet) or Replace: rename the staged folder onto the target.
     fn swap(&self, kind: DirKind) -> Result<(), OutputError> {
         let target = &self.plan.target;
         if kind == DirKind::Fresh {
-            if target.exists() {
-                std::fs::remove_dir(target).map_err(io(target))?;
-            }
             return std::fs::rename(&self.dir, target).map_err(io(target));
         }
         let old = temp_sibling(target, "old");
@@ -468,7 +478,8 @@ impl Staging {
         std::fs::remove_dir_all(&old).map_err(io(&old))
     }
 
-    /// Merge (with --force into someone else's folder): move each file in.
+    /// Merge (with --force into someone else's folder, or into an empty one): move each
+    /// file in.
     fn merge(&self, names: &[OsString]) -> Result<(), OutputError> {
         let target = &self.plan.target;
         for n in names {

@@ -170,3 +170,19 @@ fn write_via_temp_keeps_the_extension_and_refuses_symlinks() {
     assert!(write_via_temp(&q, |_| Err("no".to_string()), |e| e.to_string()).is_err());
     assert_eq!(fs::read_dir(d.path()).unwrap().count(), 3);
 }
+
+#[test]
+fn a_dot_target_is_its_real_folder() {
+    let d = tmp();
+    let out = d.path().join("out");
+    fs::create_dir(&out).unwrap();
+    let plan = plan_dir(&out.join("."), "test", false, &Inputs::new()).unwrap();
+    stage_and_commit(&plan, &[("a.csv", "1")]);
+    assert_eq!(fs::read_to_string(out.join("a.csv")).unwrap(), "1");
+    assert!(out.join(MARKER_FILE).exists());
+    assert_eq!(fs::read_dir(d.path()).unwrap().count(), 1);
+    // and it is ours now
+    let plan = plan_dir(&out, "test", false, &Inputs::new()).unwrap();
+    stage_and_commit(&plan, &[("b.csv", "2")]);
+    assert!(!out.join("a.csv").exists());
+}
