@@ -293,9 +293,12 @@ fn options_that_size_memory_are_bounded() {
 fn each_os_error_is_said_once() {
     let t = tempfile::tempdir().unwrap();
     let missing = t.path().join("missing");
+    let sim = t.path().join("sim.csv");
     for args in [
         vec!["campaign", "check", s(&missing)],
         vec!["identify", s(&missing)],
+        vec!["frf", "--params", s(&missing)],
+        vec!["simulate", "--reference", s(&missing), "--out", s(&sim)],
     ] {
         let o = shaketable(&args);
         let e = stderr(&o);
