@@ -26,7 +26,6 @@ use super::{
 use crate::params::Controller;
 use rayon::prelude::*;
 use std::collections::BTreeMap;
-use std::io::Write;
 use std::path::{Path, PathBuf};
 use toml::Spanned;
 
@@ -95,6 +94,9 @@ pub enum CampaignError {
     /// An in-memory record or campaign that cannot be written in the format.
     #[error("{file}: {message}")]
     Invalid { file: String, message: String },
+    /// An output refused or not written by the safe-write rules ([`crate::output`]).
+    #[error(transparent)]
+    Output(#[from] crate::output::OutputError),
 }
 
 fn toml_context(line: Option<usize>, test: &Option<String>, key: &Option<String>) -> String {
@@ -129,6 +131,7 @@ impl CampaignError {
             | CampaignError::Csv { file, .. }
             | CampaignError::Toml { file, .. }
             | CampaignError::Invalid { file, .. } => file,
+            CampaignError::Output(e) => e.path(),
         }
     }
 }
@@ -598,14 +601,9 @@ pub fn write_record(record: &Record, path: &Path) -> Result<(), CampaignError> {
     write_bytes(path, &bytes)
 }
 
+/// Written atomically, never through a symlink ([`crate::output::atomic_write`]).
 fn write_bytes(path: &Path, bytes: &[u8]) -> Result<(), CampaignError> {
-    let werr = |source| CampaignError::Write {
-        file: display(path),
-        source,
-    };
-    let mut f = std::fs::File::create(path).map_err(werr)?;
-    f.write_all(bytes).map_err(werr)?;
-    f.flush().map_err(werr)
+    Ok(crate::output::atomic_write(path, bytes)?)
 }
 
 // ---------------------------------------------------------------------------------------

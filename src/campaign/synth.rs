@@ -28,6 +28,7 @@ use super::{
     Campaign, CampaignInfo, Control, ControllerOverride, Geometry, Record, TestKind, TestSpec,
 };
 use crate::model::{Inputs, Model, Outputs, Reference, SensorNoise};
+use crate::output::atomic_write;
 use crate::params::Params;
 use crate::solver::{simulate_run, DEFAULT_MAX_SUBSTEP_S};
 use rand::{Rng, SeedableRng};
@@ -55,6 +56,12 @@ pub const DEFAULT_RANDOM_DURATION_S: f64 = 90.0;
 pub const TRUTH_FILE: &str = "truth.toml";
 /// Seed, noise levels and options of the synthesis.
 pub const SYNTHESIS_FILE: &str = "synthesis.toml";
+/// Longest random part of a random test, s: one hour is longer than any lab test, and
+/// keeps a campaign in memory below a few GB (1.8 M samples per random record).
+pub const MAX_RANDOM_DURATION_S: f64 = 3600.0;
+/// Smallest solver sub-step, s: 33x finer than the default, enough for a convergence
+/// check; finer steps only multiply the run time (a campaign would take hours).
+pub const MIN_SUBSTEP_S: f64 = 1e-5;
 
 /// Errors in synthesis options.
 #[derive(Debug, thiserror::Error)]
@@ -165,11 +172,18 @@ impl SynthOptions {
                 "must be at least 2 s (two 0.5 s fades and a steady part)",
             );
         }
-        if !(self.max_substep_s.is_finite() && self.max_substep_s > 0.0) {
+        if d > MAX_RANDOM_DURATION_S {
+            return bad(
+                "random_duration_s",
+                d,
+                "must be at most 3600 s (MAX_RANDOM_DURATION_S)",
+            );
+        }
+        if !(self.max_substep_s.is_finite() && self.max_substep_s >= MIN_SUBSTEP_S) {
             return bad(
                 "max_substep_s",
                 self.max_substep_s,
-                "must be finite and > 0",
+                "must be finite and at least 1e-5 s (MIN_SUBSTEP_S)",
             );
         }
         if let Some(names) = &self.tests {
@@ -785,17 +799,13 @@ pub fn write_synthetic(
     dir: &Path,
 ) -> Result<(), CampaignError> {
     write_campaign(campaign, dir)?;
-    let werr = |p: &Path| {
-        let file = p.display().to_string();
-        move |source| CampaignError::Write { file, source }
-    };
     let truth = dir.join(TRUTH_FILE);
     let text = format!(
         "# The parameters this synthetic campaign was made with (the truth).\n\
          # Tests may compare identified values with it; identification must never read it.\n{}",
         params.to_toml_string()
     );
-    std::fs::write(&truth, text).map_err(werr(&truth))?;
+    atomic_write(&truth, text.as_bytes())?;
     let info = SynthesisInfo {
         generator: format!("shaketable {} campaign synth", env!("CARGO_PKG_VERSION")),
         sample_rate_hz: campaign.info.sample_rate_hz,
@@ -810,7 +820,7 @@ pub fn write_synthetic(
             message: e.to_string(),
         })?
     );
-    std::fs::write(&syn, text).map_err(werr(&syn))?;
+    atomic_write(&syn, text.as_bytes())?;
     Ok(())
 }
 

@@ -6,6 +6,7 @@ use crate::campaign::Campaign;
 use crate::diagnose::{measured, simulate_test, simulated, Diagnosis, Part, CHANNELS};
 use crate::identify::frf::{Welch, WelchOptions};
 use crate::report::plot::{bode_png, xy_png, BodeCurve, Series};
+use crate::report::{escape_html, markdown_code, safe_file_name};
 use std::fmt::Write as _;
 use std::path::Path;
 
@@ -21,7 +22,8 @@ fn heat(x: f64) -> String {
 
 /// Write index.html, README.md and the figures into `dir`.
 pub fn write(dir: &Path, c: &Campaign, d: &Diagnosis) -> anyhow::Result<()> {
-    std::fs::create_dir_all(dir)?;
+    std::fs::create_dir_all(dir)
+        .map_err(|e| anyhow::anyhow!("{}: cannot create: {e}", dir.display()))?;
     let j = d.to_json();
     let cause = j["cause"].as_str().unwrap_or("none").to_string();
     let mut figures: Vec<(String, String)> = Vec::new();
@@ -61,7 +63,7 @@ pub fn write(dir: &Path, c: &Campaign, d: &Diagnosis) -> anyhow::Result<()> {
         let b: Vec<f64> = base[lo..hi].iter().map(|o| simulated(o, ch)).collect();
         let e: Vec<f64> = ext[lo..hi].iter().map(|o| simulated(o, ch)).collect();
         let name = &c.info.tests[i].name;
-        let file = format!("time_{name}_{}.png", CHANNELS[ch]);
+        let file = safe_file_name(&format!("time_{name}_{}.png", CHANNELS[ch]));
         let ext_label = format!("extended ({cause})");
         xy_png(
             &dir.join(&file),
@@ -167,7 +169,7 @@ pub fn write(dir: &Path, c: &Campaign, d: &Diagnosis) -> anyhow::Result<()> {
          <p>Baseline: servovalve {}, actuator {} (chosen by output error: cost {:.4e} ideal, {:.4e} nonlinear); \
          noise floor from {}: displacement {:.3e} m, acceleration {:.3e} m/s^2, force {:.1} N, spool {:.3e}, \
          valve command {:.3e}.</p>{}<p>Rule: {}</p>",
-        c.info.name,
+        escape_html(&c.info.name),
         d.gain,
         d.explained,
         d.valve_model.name(),
@@ -181,14 +183,16 @@ pub fn write(dir: &Path, c: &Campaign, d: &Diagnosis) -> anyhow::Result<()> {
         d.noise.spool,
         d.noise.valve_command,
         d.structure_change()
-            .map(|s| format!("<p>Note: {s}.</p>"))
+            .map(|s| format!("<p>Note: {}.</p>", escape_html(&s)))
             .unwrap_or_default(),
-        j["rule"].as_str().unwrap_or("")
+        escape_html(j["rule"].as_str().unwrap_or(""))
     );
     let _ = writeln!(
         md,
-        "# Diagnosis of `{}`\n\n**Cause: {cause}**, gain {:.2}, explained: {}\n",
-        c.info.name, d.gain, d.explained
+        "# Diagnosis of {}\n\n**Cause: {cause}**, gain {:.2}, explained: {}\n",
+        markdown_code(&c.info.name),
+        d.gain,
+        d.explained
     );
     if let Some(s) = d.structure_change() {
         let _ = writeln!(md, "Note: {s}.\n");
@@ -204,7 +208,7 @@ pub fn write(dir: &Path, c: &Campaign, d: &Diagnosis) -> anyhow::Result<()> {
     html.push_str("</tr>");
     md.push_str("\n|---|---|---|---|---|---|\n");
     for (name, r) in &d.baseline_rows {
-        let _ = write!(html, "<tr><td>{name}</td>");
+        let _ = write!(html, "<tr><td>{}</td>", escape_html(name));
         let _ = write!(md, "| {name} |");
         for x in r {
             let _ = write!(
@@ -263,11 +267,16 @@ pub fn write(dir: &Path, c: &Campaign, d: &Diagnosis) -> anyhow::Result<()> {
     html.push_str("</table><h2>Before and after</h2>");
     md.push_str("\n## Before and after\n\n");
     for (title, file) in &figures {
-        let _ = write!(html, "<h3>{title}</h3><img src=\"{file}\">");
+        let _ = write!(
+            html,
+            "<h3>{}</h3><img src=\"{}\">",
+            escape_html(title),
+            escape_html(file)
+        );
         let _ = write!(md, "### {title}\n\n![{title}]({file})\n\n");
     }
     html.push_str("</body></html>\n");
-    std::fs::write(dir.join("index.html"), html)?;
-    std::fs::write(dir.join("README.md"), md)?;
+    crate::output::atomic_write(&dir.join("index.html"), html.as_bytes())?;
+    crate::output::atomic_write(&dir.join("README.md"), md.as_bytes())?;
     Ok(())
 }

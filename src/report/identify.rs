@@ -4,6 +4,7 @@
 use crate::identify::{FrfData, Identification};
 use crate::params::Params;
 use crate::report::plot::{bode_png, xy_png, BodeCurve, Series};
+use crate::report::{escape_html, markdown_code};
 use num_complex::Complex64;
 use std::f64::consts::PI;
 use std::fmt::Write as _;
@@ -230,7 +231,8 @@ pub fn write(
     rows: &[Row],
     with_truth: bool,
 ) -> anyhow::Result<()> {
-    std::fs::create_dir_all(dir)?;
+    std::fs::create_dir_all(dir)
+        .map_err(|e| anyhow::anyhow!("{}: cannot create: {e}", dir.display()))?;
     let mut sections: Vec<(String, String, String)> = Vec::new(); // (title, figure, text)
     if let Some(v) = &id.servovalve {
         let f = &v.measured.frequency_hz;
@@ -554,12 +556,12 @@ pub fn write(
     let _ = FrfData::default();
     // README.md
     let mut md = format!(
-        "# Identification of `{}`\n\n```\n{}```\n\n",
-        id.campaign,
+        "# Identification of {}\n\n```\n{}```\n\n",
+        markdown_code(&id.campaign),
         text_table(rows, with_truth)
     );
     for m in &id.missing {
-        let _ = writeln!(md, "- not identified: {m}");
+        let _ = writeln!(md, "- not identified: {}", escape_html(m));
     }
     let _ = writeln!(
         md,
@@ -570,7 +572,7 @@ pub fn write(
     for (title, fig, text) in &sections {
         let _ = write!(md, "## {title}\n\n![{title}]({fig})\n\n{text}\n\n");
     }
-    std::fs::write(dir.join("README.md"), md)?;
+    crate::output::atomic_write(&dir.join("README.md"), md.as_bytes())?;
     // index.html
     let mut html = format!(
         "<!DOCTYPE html><html><head><meta charset=\"utf-8\"><title>Identification of {0}</title>\
@@ -578,7 +580,7 @@ pub fn write(
          td,th{{border:1px solid #ccc;padding:3px 8px;text-align:right}}td:first-child{{text-align:left}}\
          img{{max-width:100%}}</style></head><body><h1>Identification of {0}</h1><table><tr><th>estimate</th>\
          <th>identified</th><th>+- 1 sigma</th>{1}</tr>",
-        id.campaign,
+        escape_html(&id.campaign),
         if with_truth { "<th>truth</th><th>error</th>" } else { "" }
     );
     for r in rows {
@@ -607,12 +609,18 @@ pub fn write(
     }
     html.push_str("</table>");
     for m in &id.missing {
-        let _ = write!(html, "<p><b>not identified:</b> {m}</p>");
+        let _ = write!(html, "<p><b>not identified:</b> {}</p>", escape_html(m));
     }
     for (title, fig, text) in &sections {
-        let _ = write!(html, "<h2>{title}</h2><img src=\"{fig}\"><p>{text}</p>");
+        let _ = write!(
+            html,
+            "<h2>{}</h2><img src=\"{}\"><p>{}</p>",
+            escape_html(title),
+            escape_html(fig),
+            escape_html(text)
+        );
     }
     html.push_str("</body></html>\n");
-    std::fs::write(dir.join("index.html"), html)?;
+    crate::output::atomic_write(&dir.join("index.html"), html.as_bytes())?;
     Ok(())
 }

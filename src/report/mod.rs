@@ -4,3 +4,60 @@
 pub mod diagnose;
 pub mod identify;
 pub mod plot;
+
+/// `s` made safe as HTML text or a quoted attribute value: `& < > " '` escaped. Every
+/// string from outside the program (campaign and test names, file names, messages that
+/// quote them) goes through it before it reaches a page.
+pub fn escape_html(s: &str) -> String {
+    let mut out = String::with_capacity(s.len());
+    for c in s.chars() {
+        match c {
+            '&' => out.push_str("&amp;"),
+            '<' => out.push_str("&lt;"),
+            '>' => out.push_str("&gt;"),
+            '"' => out.push_str("&quot;"),
+            '\'' => out.push_str("&#39;"),
+            c => out.push(c),
+        }
+    }
+    out
+}
+
+/// `s` as a Markdown code span: a backtick in it (which would end the span and let the
+/// rest render as Markdown or HTML) becomes `'`.
+pub fn markdown_code(s: &str) -> String {
+    format!("`{}`", s.replace('`', "'"))
+}
+
+/// A file name made from user text (a test name): only ASCII letters, digits, `-`, `_`
+/// and `.` are kept, anything else (`/`, `..` separators, quotes, spaces) becomes `_`, so
+/// the file stays inside the report folder and its name is safe in a link.
+pub fn safe_file_name(s: &str) -> String {
+    let name: String = s
+        .chars()
+        .map(|c| {
+            if c.is_ascii_alphanumeric() || "-_.".contains(c) {
+                c
+            } else {
+                '_'
+            }
+        })
+        .collect();
+    name.trim_start_matches('.').to_string()
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn markup_is_escaped_and_file_names_stay_inside() {
+        assert_eq!(
+            escape_html("<img src=x onerror=\"a&b\">'"),
+            "&lt;img src=x onerror=&quot;a&amp;b&quot;&gt;&#39;"
+        );
+        assert_eq!(safe_file_name("../../etc/x\"y.png"), "_.._etc_x_y.png");
+        assert_eq!(safe_file_name(".hidden"), "hidden");
+        assert_eq!(markdown_code("a`<b>"), "`a'<b>`");
+    }
+}

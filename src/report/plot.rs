@@ -66,6 +66,36 @@ pub fn bode_png(
     f_lo: f64,
     f_hi: f64,
 ) -> Result<(), PlotError> {
+    write_png(path, |tmp| {
+        draw_bode(tmp, title, magnitude_label, curves, f_lo, f_hi)
+    })
+}
+
+/// Draw through a temporary sibling renamed onto `path` ([`crate::output`]); errors name
+/// `path`.
+fn write_png(
+    path: &Path,
+    draw: impl FnOnce(&Path) -> Result<(), PlotError>,
+) -> Result<(), PlotError> {
+    let named = |message: String| PlotError {
+        path: path.display().to_string(),
+        message,
+    };
+    crate::output::write_via_temp(
+        path,
+        |tmp| draw(tmp).map_err(|e| named(e.message)),
+        |e| named(e.to_string()),
+    )
+}
+
+fn draw_bode(
+    path: &Path,
+    title: &str,
+    magnitude_label: &str,
+    curves: &[BodeCurve],
+    f_lo: f64,
+    f_hi: f64,
+) -> Result<(), PlotError> {
     let err = |e: String| PlotError {
         path: path.display().to_string(),
         message: e,
@@ -135,6 +165,16 @@ pub fn bode_png(
 
 /// An x-y plot of `series` with axis labels.
 pub fn xy_png(
+    path: &Path,
+    title: &str,
+    x_label: &str,
+    y_label: &str,
+    series: &[Series],
+) -> Result<(), PlotError> {
+    write_png(path, |tmp| draw_xy(tmp, title, x_label, y_label, series))
+}
+
+fn draw_xy(
     path: &Path,
     title: &str,
     x_label: &str,

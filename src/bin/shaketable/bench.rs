@@ -11,10 +11,21 @@ pub struct Args {
 }
 
 pub fn run(args: Args) -> anyhow::Result<()> {
-    anyhow::ensure!(
-        args.seconds.is_finite() && args.seconds >= 2.0,
-        "--seconds must be at least 2"
-    );
+    use crate::limits::{within, MAX_BENCH_REPEATS, MAX_BENCH_SECONDS};
+    within(
+        "--seconds",
+        args.seconds,
+        2.0,
+        MAX_BENCH_SECONDS,
+        "MAX_BENCH_SECONDS",
+    )?;
+    within(
+        "--repeats",
+        args.repeats,
+        1,
+        MAX_BENCH_REPEATS,
+        "MAX_BENCH_REPEATS",
+    )?;
     println!(
         "{:<52} {:>11} {:>9} {:>13}",
         "workload", "simulated s", "wall s", "x real time"

@@ -4,11 +4,10 @@
 use anyhow::Context;
 use indicatif::{ProgressBar, ProgressStyle};
 use shaketable::campaign::format::read_campaign;
-use shaketable::campaign::synth::{
-    self, NoiseLevels, SynthOptions, DEFAULT_RANDOM_DURATION_S, SYNTHESIS_FILE,
-};
+use shaketable::campaign::synth::{self, NoiseLevels, SynthOptions, DEFAULT_RANDOM_DURATION_S};
+use shaketable::output::{self, Inputs};
 use shaketable::solver::DEFAULT_MAX_SUBSTEP_S;
-use std::path::{Path, PathBuf};
+use std::path::PathBuf;
 use std::time::Instant;
 
 #[derive(clap::Args)]
@@ -111,8 +110,13 @@ fn run_synth(a: SynthArgs) -> anyhow::Result<()> {
             .as_ref()
             .map(|v| v.iter().map(|s| s.trim().to_string()).collect()),
     };
+    check_synth_limits(&a)?;
     opts.validate()?;
-    guard_out_dir(&a.out_dir, a.force)?;
+    let mut inputs = Inputs::new();
+    if let Some(p) = &a.params {
+        inputs.add(p);
+    }
+    let out = output::plan_dir(&a.out_dir, SYNTH_COMMAND, a.force, &inputs)?;
     warn_if_unstable(&params, &synth::selected_program(&opts), "");
     let program = synth::selected_program(&opts);
     let table_s: f64 = program
@@ -142,7 +146,9 @@ fn run_synth(a: SynthArgs) -> anyhow::Result<()> {
     let campaign = synth::synthesise_program(&params, &program, &opts, Some(&cb))?;
     let sim_s = start.elapsed().as_secs_f64();
     bar.set_message("writing".to_string());
-    synth::write_synthetic(&campaign, &params, &opts, &a.out_dir)?;
+    let staging = out.stage()?;
+    synth::write_synthetic(&campaign, &params, &opts, staging.path())?;
+    staging.commit()?;
     bar.finish_and_clear();
     let wall = start.elapsed().as_secs_f64();
     let bytes: u64 = campaign
@@ -164,16 +170,24 @@ fn run_synth(a: SynthArgs) -> anyhow::Result<()> {
     Ok(())
 }
 
-/// Refuse to overwrite a campaign that was not synthesised (a measured one) unless
-/// `--force`.
-fn guard_out_dir(dir: &Path, force: bool) -> anyhow::Result<()> {
-    if force || !dir.join("campaign.toml").exists() || dir.join(SYNTHESIS_FILE).exists() {
-        return Ok(());
-    }
-    anyhow::bail!(
-        "{} holds a campaign.toml that was not synthesised (no {SYNTHESIS_FILE}); \
-         refusing to overwrite it (use --force)",
-        dir.display()
+/// The marker name of folders `campaign synth` makes (see [`output::plan_dir`]).
+const SYNTH_COMMAND: &str = "campaign synth";
+
+/// The options that size memory and run time, by their command-line names.
+fn check_synth_limits(a: &SynthArgs) -> anyhow::Result<()> {
+    use crate::limits::{at_least, within, MAX_RANDOM_DURATION_S, MIN_SUBSTEP_S};
+    within(
+        "--random-duration",
+        a.random_duration,
+        2.0,
+        MAX_RANDOM_DURATION_S,
+        "s; two 0.5 s fades at least, MAX_RANDOM_DURATION_S at most",
+    )?;
+    at_least(
+        "--max-substep",
+        a.max_substep,
+        MIN_SUBSTEP_S,
+        "s; MIN_SUBSTEP_S",
     )
 }
 

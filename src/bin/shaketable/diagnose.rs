@@ -1,7 +1,6 @@
 //! `shaketable diagnose DIR`: what the identified baseline misses, the physical cause,
 //! the extended model and its gain on held-out tests.
 
-use anyhow::Context;
 use shaketable::campaign::format::read_campaign;
 use shaketable::diagnose::{diagnose, CHANNELS};
 use std::path::PathBuf;
@@ -19,6 +18,10 @@ pub struct Args {
     /// Write the report (index.html, README.md, figures) into this directory.
     #[arg(long)]
     report: Option<PathBuf>,
+    /// Replace existing --json/--params-out files, and write the report into a folder that
+    /// is not a report of this command (never over an input, never through a symlink).
+    #[arg(long)]
+    force: bool,
     /// No progress bar.
     #[arg(long)]
     quiet: bool,
@@ -27,6 +30,15 @@ pub struct Args {
 pub fn run(args: Args) -> anyhow::Result<()> {
     let t0 = std::time::Instant::now();
     let campaign = read_campaign(&args.campaign)?;
+    let inputs = crate::outputs::campaign_inputs(&campaign);
+    let outputs = crate::outputs::Outputs::check(
+        "diagnose",
+        args.json.as_deref(),
+        args.params_out.as_deref(),
+        args.report.as_deref(),
+        args.force,
+        inputs,
+    )?;
     let bar = (!args.quiet).then(|| {
         let b = indicatif::ProgressBar::new(9);
         b.set_style(
@@ -114,19 +126,10 @@ pub fn run(args: Args) -> anyhow::Result<()> {
     if let Some(note) = d.structure_change() {
         println!("{note}");
     }
-    if let Some(p) = &args.json {
-        std::fs::write(p, serde_json::to_string_pretty(&j)? + "\n")
-            .with_context(|| format!("cannot write {}", p.display()))?;
-        println!("wrote {}", p.display());
-    }
-    if let Some(p) = &args.params_out {
-        std::fs::write(p, d.extended.to_toml_string())
-            .with_context(|| format!("cannot write {}", p.display()))?;
-        println!("wrote {}", p.display());
-    }
-    if let Some(dir) = &args.report {
-        shaketable::report::diagnose::write(dir, &campaign, &d)?;
-        println!("wrote {}", dir.join("index.html").display());
-    }
+    outputs.write(
+        &(serde_json::to_string_pretty(&j)? + "\n"),
+        &d.extended.to_toml_string(),
+        |dir| shaketable::report::diagnose::write(dir, &campaign, &d),
+    )?;
     Ok(())
 }

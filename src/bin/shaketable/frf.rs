@@ -4,8 +4,8 @@
 
 use anyhow::Context;
 use shaketable::linear::{log_grid, Linearisation, OilColumn, Pole, TfFigures};
+use shaketable::output::{self, Inputs};
 use shaketable::report::plot::{bode_png, BodeCurve};
-use std::io::Write;
 use std::path::PathBuf;
 
 #[derive(clap::Args)]
@@ -16,6 +16,10 @@ pub struct Args {
     /// Directory for frf.csv, bode.png and figures.json (created); print only when omitted.
     #[arg(long)]
     out: Option<PathBuf>,
+    /// Write into --out even if it is not empty and not made by `frf` (same-named files
+    /// are replaced, others kept; never an input or a symlink).
+    #[arg(long)]
+    force: bool,
     /// Lowest frequency of the CSV and plot, Hz.
     #[arg(long, default_value_t = 0.1)]
     f_min: f64,
@@ -43,9 +47,21 @@ pub fn run(args: Args) -> anyhow::Result<()> {
             args.f_max
         );
     }
-    if args.points < 10 {
-        anyhow::bail!("--points must be at least 10 (got {})", args.points);
+    crate::limits::within(
+        "--points",
+        args.points,
+        10,
+        crate::limits::MAX_FRF_POINTS,
+        "MAX_FRF_POINTS",
+    )?;
+    let mut inputs = Inputs::new();
+    if let Some(p) = &args.params {
+        inputs.add(p);
     }
+    let plan = match &args.out {
+        Some(dir) => Some(output::plan_dir(dir, "frf", args.force, &inputs)?),
+        None => None,
+    };
     let p = crate::load_params(args.params.as_deref())?;
     let lin = Linearisation::new(&p);
     if let Some(w) = shaketable::linear::stability_warning(&p) {
@@ -98,16 +114,42 @@ pub fn run(args: Args) -> anyhow::Result<()> {
     for n in &lin.notes {
         println!("note: {n}");
     }
-    let Some(out) = args.out else { return Ok(()) };
-    std::fs::create_dir_all(&out).with_context(|| format!("cannot create {}", out.display()))?;
+    let Some(plan) = plan else { return Ok(()) };
+    let figures = Figures {
+        table_tf: fig,
+        oil_column: oil,
+        poles,
+        notes: lin.notes.clone(),
+    };
+    let staging = plan.stage()?;
+    write_files(staging.path(), &args, &lin, &figures)
+        .with_context(|| format!("writing {}", plan.target().display()))?;
+    staging.commit()?;
+    let dir = plan.target();
+    println!(
+        "wrote {}, {}, {}",
+        dir.join("frf.csv").display(),
+        dir.join("bode.png").display(),
+        dir.join("figures.json").display()
+    );
+    Ok(())
+}
+
+/// frf.csv, bode.png and figures.json into `out` (a fresh folder).
+fn write_files(
+    out: &std::path::Path,
+    args: &Args,
+    lin: &Linearisation,
+    figures: &Figures,
+) -> anyhow::Result<()> {
+    let fig = &figures.table_tf;
     let grid = log_grid(args.f_min, args.f_max, args.points);
     let table = lin.sample(&grid, Linearisation::table_tf);
     let spool = lin.sample(&grid, Linearisation::command_to_spool);
     let force = lin.sample(&grid, Linearisation::spool_to_force);
     let mass = lin.sample(&grid, Linearisation::acceleration_to_force);
     let csv_path = out.join("frf.csv");
-    let mut w = csv::Writer::from_path(&csv_path)
-        .with_context(|| format!("cannot write {}", csv_path.display()))?;
+    let mut w = csv::Writer::from_writer(Vec::new());
     w.write_record([
         "frequency_hz",
         "table_gain",
@@ -139,7 +181,10 @@ pub fn run(args: Args) -> anyhow::Result<()> {
                 .map(|v| ryu::Buffer::new().format(*v).to_string()),
         )?;
     }
-    w.flush()?;
+    let bytes = w
+        .into_inner()
+        .map_err(|e| anyhow::anyhow!("{}", e.error()))?;
+    output::atomic_write(&csv_path, &bytes)?;
     let png = out.join("bode.png");
     bode_png(
         &png,
@@ -157,20 +202,7 @@ pub fn run(args: Args) -> anyhow::Result<()> {
         args.f_max,
     )?;
     let json_path = out.join("figures.json");
-    let mut f = std::fs::File::create(&json_path)
-        .with_context(|| format!("cannot write {}", json_path.display()))?;
-    let figures = Figures {
-        table_tf: fig,
-        oil_column: oil,
-        poles,
-        notes: lin.notes.clone(),
-    };
-    writeln!(f, "{}", serde_json::to_string_pretty(&figures)?)?;
-    println!(
-        "wrote {}, {}, {}",
-        csv_path.display(),
-        png.display(),
-        json_path.display()
-    );
+    let text = serde_json::to_string_pretty(figures)? + "\n";
+    output::atomic_write(&json_path, text.as_bytes())?;
     Ok(())
 }

@@ -2,7 +2,6 @@
 //! the estimates, an identified parameter file, a report with the figures, and a printed
 //! table (against the truth when the campaign is synthetic and holds truth.toml).
 
-use anyhow::Context;
 use shaketable::campaign::format::read_campaign;
 use shaketable::identify::identify;
 use std::path::PathBuf;
@@ -20,6 +19,10 @@ pub struct Args {
     /// Write the report (index.html, README.md, figures) into this directory.
     #[arg(long)]
     report: Option<PathBuf>,
+    /// Replace existing --json/--params-out files, and write the report into a folder that
+    /// is not a report of this command (never over an input, never through a symlink).
+    #[arg(long)]
+    force: bool,
     /// Parameter file with the true values to compare against (default: the campaign's
     /// truth.toml when it exists, as written by `campaign synth`).
     #[arg(long)]
@@ -29,10 +32,24 @@ pub struct Args {
 pub fn run(args: Args) -> anyhow::Result<()> {
     let t0 = std::time::Instant::now();
     let campaign = read_campaign(&args.campaign)?;
-    let id = identify(&campaign);
+    let mut inputs = crate::outputs::campaign_inputs(&campaign);
     let truth_path = args.truth.clone().or_else(|| {
         Some(args.campaign.join(shaketable::campaign::synth::TRUTH_FILE)).filter(|p| p.exists())
     });
+    if let Some(p) = &truth_path {
+        inputs.add(p);
+    }
+    let outputs = crate::outputs::Outputs::check(
+        "identify",
+        args.json.as_deref(),
+        args.params_out.as_deref(),
+        args.report.as_deref(),
+        args.force,
+        inputs,
+    )?;
+    let bar = crate::spinner(format!("identifying {}", args.campaign.display()));
+    let id = identify(&campaign);
+    bar.finish_and_clear();
     let truth = match &truth_path {
         Some(p) => Some(shaketable::Params::from_file(p)?),
         None => None,
@@ -50,19 +67,10 @@ pub fn run(args: Args) -> anyhow::Result<()> {
     for m in &id.missing {
         println!("not identified: {m}");
     }
-    if let Some(p) = &args.json {
-        std::fs::write(p, serde_json::to_string_pretty(&id.to_json())? + "\n")
-            .with_context(|| format!("cannot write {}", p.display()))?;
-        println!("wrote {}", p.display());
-    }
-    if let Some(p) = &args.params_out {
-        std::fs::write(p, id.params.to_toml_string())
-            .with_context(|| format!("cannot write {}", p.display()))?;
-        println!("wrote {}", p.display());
-    }
-    if let Some(dir) = &args.report {
-        shaketable::report::identify::write(dir, &id, &rows, truth.is_some())?;
-        println!("wrote {}", dir.join("index.html").display());
-    }
+    outputs.write(
+        &(serde_json::to_string_pretty(&id.to_json())? + "\n"),
+        &id.params.to_toml_string(),
+        |dir| shaketable::report::identify::write(dir, &id, &rows, truth.is_some()),
+    )?;
     Ok(())
 }

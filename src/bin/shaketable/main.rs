@@ -7,6 +7,8 @@ mod diagnose;
 mod fmu;
 mod frf;
 mod identify;
+mod limits;
+mod outputs;
 mod params;
 mod simulate;
 
@@ -63,9 +65,27 @@ fn main() {
         Command::Fmu(a) => fmu::run(a),
     };
     if let Err(e) = result {
-        eprintln!("error: {e:#}");
+        eprintln!("error: {}", error_text(&e));
         std::process::exit(1);
     }
+}
+
+/// The error and its causes, each said once: a cause whose text is already in the
+/// message (an error that shows its source, e.g. `file: cannot read: {source}`) is not
+/// repeated, as `{e:#}` would.
+fn error_text(e: &anyhow::Error) -> String {
+    let mut text = String::new();
+    for cause in e.chain() {
+        let c = cause.to_string();
+        if text.contains(&c) {
+            continue;
+        }
+        if !text.is_empty() {
+            text.push_str(": ");
+        }
+        text.push_str(&c);
+    }
+    text
 }
 
 /// Read a parameter file, or the TREES Lab defaults when none is given.
@@ -74,4 +94,17 @@ pub fn load_params(path: Option<&std::path::Path>) -> anyhow::Result<shaketable:
         Some(p) => shaketable::Params::from_file(p)?,
         None => shaketable::Params::trees_lab(),
     })
+}
+
+/// A spinner with `message` and the elapsed time on stderr, for work without steps to
+/// count; hidden when stderr is not a terminal (indicatif's default target).
+pub fn spinner(message: String) -> indicatif::ProgressBar {
+    let b = indicatif::ProgressBar::new_spinner();
+    b.set_style(
+        indicatif::ProgressStyle::with_template("{spinner} {msg} ({elapsed})")
+            .unwrap_or_else(|_| indicatif::ProgressStyle::default_spinner()),
+    );
+    b.set_message(message);
+    b.enable_steady_tick(std::time::Duration::from_millis(200));
+    b
 }

@@ -7,9 +7,9 @@
 //! next to the CSV when it lists that file; `--no-campaign` ignores both. The sample
 //! rate is `--sample-rate`, else the campaign's, else inferred from the time column.
 
-use anyhow::Context;
-use shaketable::campaign::format::{read_campaign_info, read_reference, write_record};
+use shaketable::campaign::format::{read_campaign_info, read_reference, record_to_csv};
 use shaketable::campaign::{CampaignInfo, Record, TestSpec};
+use shaketable::output::{self, Inputs};
 use shaketable::solver::simulate_run;
 use shaketable::solver::DEFAULT_MAX_SUBSTEP_S;
 use shaketable::Model;
@@ -42,6 +42,9 @@ pub struct Args {
     /// Largest solver sub-step, s.
     #[arg(long, default_value_t = DEFAULT_MAX_SUBSTEP_S, value_name = "S")]
     max_substep: f64,
+    /// Replace --out if it exists (never an input of this run, never through a symlink).
+    #[arg(long)]
+    force: bool,
 }
 
 /// The campaign test that records `reference`, if any.
@@ -52,6 +55,26 @@ fn find_test<'a>(info: &'a CampaignInfo, dir: &Path, reference: &Path) -> Option
         .find(|t| dir.join(&t.file).canonicalize().ok().as_ref() == Some(&target))
 }
 
+/// The numeric options that size run time, within their limits.
+fn check_limits(a: &Args) -> anyhow::Result<()> {
+    use crate::limits::{at_least, within, MAX_SAMPLE_RATE_HZ, MIN_SUBSTEP_S};
+    if let Some(fs) = a.sample_rate {
+        within(
+            "--sample-rate",
+            fs,
+            f64::MIN_POSITIVE,
+            MAX_SAMPLE_RATE_HZ,
+            "Hz; MAX_SAMPLE_RATE_HZ",
+        )?;
+    }
+    at_least(
+        "--max-substep",
+        a.max_substep,
+        MIN_SUBSTEP_S,
+        "s; MIN_SUBSTEP_S",
+    )
+}
+
 pub fn run(a: Args) -> anyhow::Result<()> {
     let mut params = crate::load_params(a.params.as_deref())?;
     for e in &a.effects {
@@ -59,17 +82,7 @@ pub fn run(a: Args) -> anyhow::Result<()> {
             .apply_effect_spec(e)
             .map_err(|m| anyhow::anyhow!("--effect {e}: {m}"))?;
     }
-    if let Some(fs) = a.sample_rate {
-        anyhow::ensure!(
-            fs.is_finite() && fs > 0.0,
-            "--sample-rate {fs}: must be > 0"
-        );
-    }
-    anyhow::ensure!(
-        a.max_substep.is_finite() && a.max_substep > 0.0,
-        "--max-substep {}: must be > 0",
-        a.max_substep
-    );
+    check_limits(&a)?;
     // the campaign the reference belongs to
     let campaign: Option<(PathBuf, CampaignInfo)> = if a.no_campaign {
         None
@@ -131,13 +144,32 @@ pub fn run(a: Args) -> anyhow::Result<()> {
             None => {}
         }
     }
+    // the output is checked before the simulation: never the reference, never a symlink
+    let mut inputs = Inputs::new();
+    inputs.add(&a.reference);
+    for p in a.params.iter() {
+        inputs.add(p);
+    }
+    if let Some((dir, info)) = &campaign {
+        inputs.add(&dir.join("campaign.toml"));
+        for t in &info.tests {
+            inputs.add(&dir.join(&t.file));
+        }
+    }
+    output::check_file(&a.out, a.force, &inputs)?;
     let reference = read_reference(&a.reference, fs)?;
     let fs = reference.sample_rate_hz;
     if let Some(w) = shaketable::linear::stability_warning(&params) {
         eprintln!("warning: {w}");
     }
     let model = Model::new(&params);
+    let samples = reference.time_s.len();
+    let bar = crate::spinner(format!(
+        "simulating {samples} samples ({:.1} s of table time)",
+        samples as f64 / fs
+    ));
     let run = simulate_run(&model, &reference.inputs(), fs, None, a.max_substep);
+    bar.finish_and_clear();
     if let Some(stop) = run.stop {
         anyhow::bail!("simulating {}: {}", a.reference.display(), stop.reason);
     }
@@ -159,11 +191,8 @@ pub fn run(a: Args) -> anyhow::Result<()> {
             ("pressure_b_pa".to_string(), col(|o| o.pressure_b_pa)),
         ],
     };
-    if let Some(parent) = a.out.parent().filter(|p| !p.as_os_str().is_empty()) {
-        std::fs::create_dir_all(parent)
-            .with_context(|| format!("cannot create {}", parent.display()))?;
-    }
-    write_record(&record, &a.out)?;
+    let bytes = record_to_csv(&record, &a.out.display().to_string())?;
+    output::write_file(&a.out, &bytes, a.force, &inputs)?;
     eprintln!(
         "simulated {} samples ({} s at {fs} Hz), wrote {}",
         record.len(),
