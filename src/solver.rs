@@ -334,7 +334,41 @@ pub fn simulate_run_with(
     max_substep_s: f64,
     checks: Checks,
 ) -> Run {
-    let mut sim = Simulator::new(model.clone(), 0.0, max_substep_s);
+    let sim = Simulator::new(model.clone(), 0.0, max_substep_s);
+    run_observed(sim, inputs, sample_rate_hz, noise, checks, &|_| {})
+}
+
+/// Samples between two calls of a run's progress callback.
+pub const PROGRESS_EVERY_SAMPLES: usize = 1024;
+
+/// [`simulate_run`] that calls `progress(samples done)` every
+/// [`PROGRESS_EVERY_SAMPLES`] samples (a progress bar for long runs).
+pub fn simulate_run_observed(
+    model: &Model,
+    inputs: &[Inputs],
+    sample_rate_hz: f64,
+    max_substep_s: f64,
+    progress: &dyn Fn(usize),
+) -> Run {
+    let sim = Simulator::new(model.clone(), 0.0, max_substep_s);
+    run_observed(
+        sim,
+        inputs,
+        sample_rate_hz,
+        None,
+        Checks::Envelope,
+        progress,
+    )
+}
+
+fn run_observed(
+    mut sim: Simulator,
+    inputs: &[Inputs],
+    sample_rate_hz: f64,
+    noise: Option<&[SensorNoise]>,
+    checks: Checks,
+    progress: &dyn Fn(usize),
+) -> Run {
     sim.checks = checks;
     let dt = 1.0 / sample_rate_hz;
     let zero = SensorNoise::default();
@@ -342,6 +376,9 @@ pub fn simulate_run_with(
     for k in 0..inputs.len() {
         let nk = noise.map(|n| &n[k]).unwrap_or(&zero);
         out.push(sim.outputs(&inputs[k], nk));
+        if k % PROGRESS_EVERY_SAMPLES == 0 {
+            progress(k);
+        }
         if k + 1 < inputs.len() {
             sim.advance(dt, &inputs[k], &inputs[k + 1], nk);
             // keep sample times exact (no drift from repeated addition)

@@ -10,7 +10,7 @@
 use shaketable::campaign::format::{read_campaign_info, read_reference, record_to_csv};
 use shaketable::campaign::{CampaignInfo, Record, TestSpec};
 use shaketable::output::{self, Inputs};
-use shaketable::solver::simulate_run;
+use shaketable::solver::simulate_run_observed;
 use shaketable::solver::DEFAULT_MAX_SUBSTEP_S;
 use shaketable::Model;
 use std::path::{Path, PathBuf};
@@ -164,11 +164,17 @@ pub fn run(a: Args) -> anyhow::Result<()> {
     }
     let model = Model::new(&params);
     let samples = reference.time_s.len();
-    let bar = crate::spinner(format!(
-        "simulating {samples} samples ({:.1} s of table time)",
-        samples as f64 / fs
-    ));
-    let run = simulate_run(&model, &reference.inputs(), fs, None, a.max_substep);
+    // a bar on a terminal only (indicatif hides it when stderr is not one)
+    let bar = indicatif::ProgressBar::new(samples as u64);
+    bar.set_style(
+        indicatif::ProgressStyle::with_template(
+            "simulating {bar:30} {pos}/{len} samples ({elapsed}, eta {eta})",
+        )
+        .unwrap_or_else(|_| indicatif::ProgressStyle::default_bar()),
+    );
+    let run = simulate_run_observed(&model, &reference.inputs(), fs, a.max_substep, &|k| {
+        bar.set_position(k as u64)
+    });
     bar.finish_and_clear();
     if let Some(stop) = run.stop {
         anyhow::bail!("simulating {}: {}", a.reference.display(), stop.reason);
