@@ -5,10 +5,12 @@
 
 #![allow(non_snake_case, clippy::missing_safety_doc)]
 
-use super::instance::{deserialize, serialize, FmiError, Instance, Phase, Snapshot};
+use super::instance::{
+    deserialize, fmi_name_of_key, serialize, FmiError, Instance, Phase, Snapshot,
+};
 use super::model_description::GUID;
 use super::variables::Kind;
-use crate::params::Params;
+use crate::params::{Params, ParamsError};
 use fmi_sys::fmi2::*;
 use std::ffi::{c_char, CStr, CString};
 use std::panic::{catch_unwind, AssertUnwindSafe};
@@ -262,7 +264,14 @@ fn read_parameters(path: &std::path::Path) -> Result<Params, String> {
             meta.len()
         ));
     }
-    Params::from_file(path).map_err(|e| e.to_string())
+    Params::from_file(path).map_err(|e| match &e {
+        // the file's own key, and the FMI variable it sets
+        ParamsError::Invalid { key, .. } => match fmi_name_of_key(key) {
+            Some(name) => format!("{e} (FMI variable {name})"),
+            None => e.to_string(),
+        },
+        _ => e.to_string(),
+    })
 }
 
 #[no_mangle]
@@ -1016,3 +1025,28 @@ const _: fmi2GetRealStatusTYPE = Some(fmi2GetRealStatus);
 const _: fmi2GetIntegerStatusTYPE = Some(fmi2GetIntegerStatus);
 const _: fmi2GetBooleanStatusTYPE = Some(fmi2GetBooleanStatus);
 const _: fmi2GetStringStatusTYPE = Some(fmi2GetStringStatus);
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use std::path::PathBuf;
+
+    #[test]
+    fn resource_uris_are_parsed_on_bytes() {
+        let p = |u: &[u8]| resource_path(u);
+        let ok = |s: &str| Ok(PathBuf::from(s));
+        assert_eq!(p(b"file:///a/b%20c"), ok("/a/b c"));
+        assert_eq!(p(b"file://localhost/a/b"), ok("/a/b"));
+        assert_eq!(p(b"FILE://LOCALHOST/a"), ok("/a"));
+        assert_eq!(p(b"file:/a/%C3%A9"), ok("/a/\u{e9}"));
+        assert_eq!(p(b"/plain/path"), ok("/plain/path"));
+        use ResourceUriError::*;
+        assert_eq!(p(b"file:///a%\xc3\xa9"), Err(BadEscape(2)));
+        assert_eq!(p(b"file:///a%4"), Err(BadEscape(2)));
+        assert_eq!(p(b"file:///a%00b"), Err(Nul));
+        assert_eq!(p(b"file://server/a"), Err(RemoteHost("server".into())));
+        assert_eq!(p(b"file:a"), Err(NotFile));
+        assert_eq!(p(b"http://x/a"), Err(NotFile));
+        assert_eq!(p(b""), Err(Empty));
+    }
+}
