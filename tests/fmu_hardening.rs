@@ -381,6 +381,9 @@ fn edited(bytes: &[u8], edit: impl FnOnce(&mut serde_json::Value)) -> Vec<u8> {
     v.to_string().into_bytes()
 }
 
+/// One change to a serialised state's JSON.
+type Edit = Box<dyn FnOnce(&mut serde_json::Value)>;
+
 #[test]
 fn deserialised_states_with_nan_or_infinite_numbers_are_refused() {
     let f = Fmu::new("nanstate");
@@ -390,7 +393,7 @@ fn deserialised_states_with_nan_or_infinite_numbers_are_refused() {
     assert_eq!(f.load_state(&good), 0);
     let nan = f64::NAN.to_bits();
     let inf = f64::INFINITY.to_bits();
-    let cases: Vec<Box<dyn FnOnce(&mut serde_json::Value)>> = vec![
+    let cases: Vec<Edit> = vec![
         Box::new(move |v| v["time"] = nan.into()),
         Box::new(move |v| v["time"] = inf.into()),
         Box::new(move |v| v["start"] = nan.into()),

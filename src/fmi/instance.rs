@@ -433,10 +433,7 @@ impl Instance {
             );
         }
         let from = inputs_from(&self.inputs);
-        let mut end = self.inputs;
-        for k in 0..4 {
-            end[k] += self.input_slopes[k] * h;
-        }
+        let end: [f64; 4] = std::array::from_fn(|k| self.inputs[k] + self.input_slopes[k] * h);
         if end.iter().any(|x| !x.is_finite()) {
             return err(
                 F,
