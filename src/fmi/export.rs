@@ -318,7 +318,8 @@ pub unsafe extern "C" fn fmi2Instantiate(
     // SAFETY: non-null callbacks struct from the importer.
     let cb = unsafe { *functions };
     let name = unsafe { c_str(instanceName) };
-    let comp = Component {
+    // the component first, so that every refusal below reaches the importer's logger
+    let mut comp = Component {
         instance: Instance::new(name.as_deref().unwrap_or(""), Params::trees_lab()),
         logger: cb.logger,
         environment: cb.componentEnvironment,
@@ -328,7 +329,6 @@ pub unsafe extern "C" fn fmi2Instantiate(
     let res = (!fmuResourceLocation.is_null())
         .then(|| unsafe { CStr::from_ptr(fmuResourceLocation) }.to_bytes());
     let guid = unsafe { c_str(fmuGUID) };
-    let mut comp = comp;
     let r = catch_unwind(AssertUnwindSafe(|| {
         instantiate(&mut comp, fmuType, guid.as_deref(), res)
     }));
