@@ -1,7 +1,8 @@
 //! The FMU's C ABI exercised in-process (the exported functions of the crate, called
 //! through their FMI 2.0 signatures): equality with the library simulator, state
-//! get/set/serialize, independent instances, reset, step-size independence, and a property
-//! test of random call sequences (no crash, an allowed status, a logged message per error).
+//! get/set/serialize, independent instances, reset, step-size independence, and property
+//! tests of random call sequences and of out-of-envelope parameters, both from random
+//! resource locations (no crash, no hang, an allowed status, a logged message per error).
 
 use fmi_sys::fmi2::*;
 use proptest::prelude::*;
@@ -47,6 +48,11 @@ struct Fmu {
 
 impl Fmu {
     fn new(name: &str) -> Fmu {
+        Fmu::open(name, None).expect("instantiate")
+    }
+
+    /// Instantiate with raw resource-location bytes (`None`: a null pointer).
+    fn open(name: &str, resources: Option<&[u8]>) -> Option<Fmu> {
         INIT.call_once(|| {
             let _ = log::set_logger(&Collect);
             log::set_max_level(log::LevelFilter::Trace);
@@ -60,23 +66,23 @@ impl Fmu {
         });
         let n = CString::new(name).unwrap();
         let guid = CString::new(GUID).unwrap();
+        let res = resources.map(|r| CString::new(r).unwrap());
         let c = unsafe {
             fmi2Instantiate(
                 n.as_ptr(),
                 fmi2Type_fmi2CoSimulation,
                 guid.as_ptr(),
-                std::ptr::null(),
+                res.as_ref().map_or(std::ptr::null(), |r| r.as_ptr()),
                 &*cb,
                 0,
                 0,
             )
         };
-        assert!(!c.is_null());
-        Fmu {
+        (!c.is_null()).then_some(Fmu {
             c,
             _name: n,
             _cb: cb,
-        }
+        })
     }
 
     fn init(&self) {
@@ -393,16 +399,137 @@ fn call() -> impl Strategy<Value = Call> {
     ]
 }
 
+/// Resource locations as an importer might get them wrong: null, random bytes, file URIs
+/// with random (and broken, non-ASCII) percent escapes, very long ones.
+fn resource_location() -> impl Strategy<Value = Option<Vec<u8>>> {
+    let byte = 1u8..=255; // any byte but NUL (a C string)
+    let escape = (byte.clone(), byte.clone()).prop_map(|(a, b)| vec![b'%', a, b]);
+    let piece = prop_oneof![
+        proptest::collection::vec(byte.clone(), 0..8),
+        escape,
+        Just(b"%".to_vec()),
+        Just(b"%C3%A9".to_vec()),
+        Just(b"%\xc3\xa9".to_vec()),
+        Just(b"/".to_vec()),
+    ];
+    let prefix = prop_oneof![
+        Just(b"file:///".to_vec()),
+        Just(b"file://localhost/".to_vec()),
+        Just(b"file:/".to_vec()),
+        Just(b"file://host/".to_vec()),
+        Just(b"FILE:".to_vec()),
+        Just(Vec::new()),
+    ];
+    prop_oneof![
+        Just(None),
+        proptest::collection::vec(byte, 0..64).prop_map(Some),
+        (prefix, proptest::collection::vec(piece, 0..12))
+            .prop_map(|(p, ps)| Some([p, ps.concat()].concat())),
+        (1usize..20_000).prop_map(|n| Some([b"file:///".to_vec(), vec![b'%'; n]].concat())),
+    ]
+}
+
+/// fmi2Instantiate with any location: an instance (the defaults, with a logged warning
+/// when the location is unusable), or null with a logged reason; never a panic.
+fn instantiate_anywhere(name: &str, res: Option<&[u8]>) -> Result<Fmu, TestCaseError> {
+    let f = Fmu::open(name, res);
+    let msgs = logged(name);
+    let shown = res.map(|r| String::from_utf8_lossy(&r[..r.len().min(60)]).into_owned());
+    prop_assert!(
+        !msgs.iter().any(|m| m.contains("panic")),
+        "{shown:?}: {msgs:?}"
+    );
+    match f {
+        Some(f) => Ok(f),
+        None => {
+            prop_assert!(!msgs.is_empty(), "{shown:?} refused without a message");
+            Err(TestCaseError::reject(
+                "location refused (an existing folder)",
+            ))
+        }
+    }
+}
+
+/// Parameters outside the envelope the model describes: unstable or absurd gains, no
+/// force feedback, a friction yield far below what a sub-step resolves, a feather-light
+/// table, a weak pump.
+fn out_of_envelope() -> impl Strategy<Value = (u32, f64)> {
+    prop_oneof![
+        Just((100, -50.0)),
+        Just((100, 1e6)),
+        (100u32..106, -1e3..1e3f64),
+        Just((105, 0.0)),
+        Just((105, -1e-6)),
+        Just((133, 1e-9)),
+        Just((133, 1e-14)),
+        Just((130, 1e-3)),
+        Just((124, 1e3)),
+        Just((126, 1e3)),
+        Just((132, 1e9)),
+        Just((121, 1e-9)),
+    ]
+}
+
+/// Longest accepted wall time of one call: a step must not run away with sub-steps
+/// (generous for a loaded 2-core machine; a runaway took minutes).
+const CALL_TIME_LIMIT: std::time::Duration = std::time::Duration::from_secs(5);
+
+proptest! {
+    #![proptest_config(ProptestConfig { cases: 24, .. ProptestConfig::default() })]
+    /// Out-of-envelope parameters: every step is fmi2OK with finite outputs, or an
+    /// error/discard with a logged message; never a panic, never a hang.
+    #[test]
+    fn out_of_envelope_parameters_step_or_fail_cleanly(
+        params in proptest::collection::vec(out_of_envelope(), 1..4),
+        res in resource_location(),
+        h in prop_oneof![Just(1.0 / 512.0), 1e-4..0.05f64],
+        amplitude in prop_oneof![1 => Just(0.0), 4 => 1e-4..0.2f64],
+        id in 0u64..u64::MAX,
+    ) {
+        let name = format!("envelope{id}");
+        let f = instantiate_anywhere(&name, res.as_deref())?;
+        unsafe {
+            prop_assert_eq!(fmi2SetupExperiment(f.c, 0, 0.0, 0.0, 0, 0.0), 0);
+            prop_assert_eq!(fmi2EnterInitializationMode(f.c), 0);
+        }
+        for (vr, x) in &params {
+            prop_assert_eq!(f.set(&[*vr], &[*x]), 0);
+        }
+        if unsafe { fmi2ExitInitializationMode(f.c) } != 0 {
+            prop_assert!(!logged(&name).is_empty(), "refused {params:?} without a message");
+            return Ok(());
+        }
+        for k in 0..60 {
+            let t = k as f64 * h;
+            prop_assert_eq!(f.set(&[0], &[amplitude * (7.0 * t).sin()]), 0);
+            let start = std::time::Instant::now();
+            let s = f.step(t, h);
+            let took = start.elapsed();
+            prop_assert!(took < CALL_TIME_LIMIT, "{params:?}: step {k} took {took:?}");
+            if s == fmi2Status_fmi2OK {
+                let o = f.get(&OUTPUTS);
+                prop_assert!(o.iter().all(|x| x.is_finite()), "{params:?}: step {k} gave {o:?}");
+            } else {
+                prop_assert!(s == fmi2Status_fmi2Error || s == fmi2Status_fmi2Discard, "status {s}");
+                let msgs = logged(&name);
+                prop_assert!(msgs.iter().any(|m| m.contains("fmi2DoStep")), "{params:?}: {msgs:?}");
+                break;
+            }
+        }
+    }
+}
+
 proptest! {
     #![proptest_config(ProptestConfig { cases: 64, .. ProptestConfig::default() })]
     #[test]
-    fn random_call_sequences_never_crash(calls in proptest::collection::vec(call(), 1..40), id in 0u64..u64::MAX) {
+    fn random_call_sequences_never_crash(calls in proptest::collection::vec(call(), 1..40), id in 0u64..u64::MAX, res in resource_location()) {
         let name = format!("prop{id}");
-        let f = Fmu::new(&name);
+        let f = instantiate_anywhere(&name, res.as_deref())?;
         let mut state: fmi2FMUstate = std::ptr::null_mut();
         let mut time = 0.0;
         let mut errors = 0usize;
         for c in &calls {
+            let start = std::time::Instant::now();
             let s = unsafe {
                 match c {
                     Call::Setup(t) => fmi2SetupExperiment(f.c, 0, 0.0, *t, 0, 0.0),
@@ -427,6 +554,7 @@ proptest! {
                     Call::NullGet => fmi2GetReal(f.c, std::ptr::null(), 2, std::ptr::null_mut()),
                 }
             };
+            prop_assert!(start.elapsed() < CALL_TIME_LIMIT, "{c:?} took {:?}", start.elapsed());
             prop_assert!(s == fmi2Status_fmi2OK || s == fmi2Status_fmi2Error || s == fmi2Status_fmi2Discard, "{c:?} returned {s}");
             if s == fmi2Status_fmi2Error {
                 errors += 1;

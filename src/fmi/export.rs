@@ -5,15 +5,18 @@
 
 #![allow(non_snake_case, clippy::missing_safety_doc)]
 
-use super::instance::{deserialize, serialize, FmiError, Instance, Phase, Snapshot};
+use super::instance::{
+    deserialize, fmi_name_of_key, serialize, FmiError, Instance, Phase, Snapshot,
+};
 use super::model_description::GUID;
 use super::variables::Kind;
-use crate::params::Params;
+use crate::params::{Params, ParamsError};
 use fmi_sys::fmi2::*;
 use std::ffi::{c_char, CStr, CString};
 use std::panic::{catch_unwind, AssertUnwindSafe};
 
 const OK: fmi2Status = fmi2Status_fmi2OK;
+const WARNING: fmi2Status = fmi2Status_fmi2Warning;
 const DISCARD: fmi2Status = fmi2Status_fmi2Discard;
 const ERROR: fmi2Status = fmi2Status_fmi2Error;
 const FATAL: fmi2Status = fmi2Status_fmi2Fatal;
@@ -119,42 +122,156 @@ unsafe fn c_str(p: fmi2String) -> Option<String> {
     }
 }
 
-/// `file:///path/resources` (or a plain path) to a path.
-fn resource_path(uri: &str) -> std::path::PathBuf {
-    let p = uri
-        .strip_prefix("file://")
-        .or_else(|| uri.strip_prefix("file:"))
-        .unwrap_or(uri);
-    let p = if p.starts_with("//") { &p[1..] } else { p };
-    // minimal percent-decoding (spaces and the like)
-    let mut out = Vec::new();
-    let b = p.as_bytes();
-    let mut i = 0;
-    while i < b.len() {
-        if b[i] == b'%' && i + 2 < b.len() {
-            if let Ok(x) = u8::from_str_radix(&p[i + 1..i + 3], 16) {
-                out.push(x);
-                i += 3;
-                continue;
-            }
-        }
-        out.push(b[i]);
-        i += 1;
-    }
-    std::path::PathBuf::from(String::from_utf8_lossy(&out).into_owned())
+/// The largest parameters.toml read: a real one is a few kB; anything larger is not a
+/// parameter file (and a device such as /dev/zero would never end).
+const MAX_PARAMETERS_FILE_BYTES: u64 = 1 << 20;
+
+/// Why a resource location cannot be used.
+#[derive(Debug, thiserror::Error, PartialEq)]
+pub enum ResourceUriError {
+    #[error("is empty")]
+    Empty,
+    #[error("is not a file URI (expected file:///path, file://localhost/path or file:/path)")]
+    NotFile,
+    #[error(
+        "names the host {0:?}: only local files (file:///path, file://localhost/path) can be read"
+    )]
+    RemoteHost(String),
+    #[error("has a bad percent escape at byte {0} (expected % and two hex digits)")]
+    BadEscape(usize),
+    #[error("decodes to a path with a NUL byte")]
+    Nul,
 }
 
-/// Start parameters: resources/parameters.toml when the FMU carries one, else the defaults.
-fn start_params(resources: Option<&str>) -> Result<Params, String> {
-    let Some(uri) = resources else {
-        return Ok(Params::trees_lab());
-    };
-    let path = resource_path(uri).join("parameters.toml");
-    if path.exists() {
-        Params::from_file(&path).map_err(|e| e.to_string())
-    } else {
-        Ok(Params::trees_lab())
+/// `file:///p`, `file://localhost/p`, `file:/p` (RFC 8089; the scheme in any case) or a
+/// plain absolute path, percent-decoded on bytes, to a local path.
+pub fn resource_path(uri: &[u8]) -> Result<std::path::PathBuf, ResourceUriError> {
+    use ResourceUriError::*;
+    if uri.is_empty() {
+        return Err(Empty);
     }
+    let encoded: &[u8] = if uri.len() >= 5 && uri[..5].eq_ignore_ascii_case(b"file:") {
+        let rest = &uri[5..];
+        match rest.strip_prefix(b"//") {
+            Some(auth) => {
+                let end = auth.iter().position(|&b| b == b'/').unwrap_or(auth.len());
+                let host = &auth[..end];
+                if !(host.is_empty() || host.eq_ignore_ascii_case(b"localhost")) {
+                    return Err(RemoteHost(String::from_utf8_lossy(host).into_owned()));
+                }
+                &auth[end..]
+            }
+            None if rest.starts_with(b"/") => rest,
+            None => return Err(NotFile),
+        }
+    } else if uri.starts_with(b"/") {
+        uri
+    } else {
+        return Err(NotFile);
+    };
+    let path = percent_decode(encoded)?;
+    if path.contains(&0) {
+        return Err(Nul);
+    }
+    Ok(path_from_bytes(path))
+}
+
+/// `%XX` to the byte XX; a `%` without two hex digits is an error.
+fn percent_decode(b: &[u8]) -> Result<Vec<u8>, ResourceUriError> {
+    let hex = |c: u8| (c as char).to_digit(16).map(|d| d as u8);
+    let mut out = Vec::with_capacity(b.len());
+    let mut i = 0;
+    while i < b.len() {
+        if b[i] == b'%' {
+            let (Some(h), Some(l)) = (
+                b.get(i + 1).copied().and_then(hex),
+                b.get(i + 2).copied().and_then(hex),
+            ) else {
+                return Err(ResourceUriError::BadEscape(i));
+            };
+            out.push(h << 4 | l);
+            i += 3;
+        } else {
+            out.push(b[i]);
+            i += 1;
+        }
+    }
+    Ok(out)
+}
+
+#[cfg(unix)]
+fn path_from_bytes(b: Vec<u8>) -> std::path::PathBuf {
+    use std::os::unix::ffi::OsStringExt;
+    std::ffi::OsString::from_vec(b).into()
+}
+
+#[cfg(not(unix))]
+fn path_from_bytes(b: Vec<u8>) -> std::path::PathBuf {
+    String::from_utf8_lossy(&b).into_owned().into()
+}
+
+/// Start parameters and, when they are the defaults for want of a usable location, the
+/// warning that says so.
+///
+/// What a user expects: an FMU built with `--params` runs the lab's values or refuses to
+/// start, never the defaults behind their back. So a location that exists with a
+/// parameters.toml that cannot be read or is invalid is an error; a folder without one
+/// is an FMU built without `--params` (defaults, silently); a null, malformed or missing
+/// location means the importer lost the FMU's resources: the defaults run, with a
+/// warning that names the location and says so.
+pub fn start_params(resources: Option<&[u8]>) -> Result<(Params, Option<String>), String> {
+    const DEFAULTS: &str = "the built-in TREES Lab defaults are used \
+        (a resources/parameters.toml shipped in the FMU cannot be read)";
+    let Some(uri) = resources else {
+        return Ok((
+            Params::trees_lab(),
+            Some(format!("fmuResourceLocation is null: {DEFAULTS}")),
+        ));
+    };
+    let shown = String::from_utf8_lossy(uri);
+    let dir = match resource_path(uri) {
+        Ok(d) => d,
+        Err(e) => {
+            let w = format!("fmuResourceLocation {shown:?} {e}: {DEFAULTS}");
+            return Ok((Params::trees_lab(), Some(w)));
+        }
+    };
+    if !dir.is_dir() {
+        let w = format!(
+            "fmuResourceLocation {shown:?} is not a folder ({}): {DEFAULTS}",
+            dir.display()
+        );
+        return Ok((Params::trees_lab(), Some(w)));
+    }
+    let path = dir.join("parameters.toml");
+    match std::fs::symlink_metadata(&path) {
+        Err(e) if e.kind() == std::io::ErrorKind::NotFound => Ok((Params::trees_lab(), None)),
+        Err(e) => Err(format!("{}: {e}", path.display())),
+        Ok(_) => read_parameters(&path).map(|p| (p, None)),
+    }
+}
+
+/// A parameters.toml that exists: a regular file of plausible size, valid.
+fn read_parameters(path: &std::path::Path) -> Result<Params, String> {
+    let meta = std::fs::metadata(path).map_err(|e| format!("{}: {e}", path.display()))?;
+    if !meta.is_file() {
+        return Err(format!("{}: not a regular file", path.display()));
+    }
+    if meta.len() > MAX_PARAMETERS_FILE_BYTES {
+        return Err(format!(
+            "{}: {} bytes, larger than any parameter file ({MAX_PARAMETERS_FILE_BYTES} bytes at most)",
+            path.display(),
+            meta.len()
+        ));
+    }
+    Params::from_file(path).map_err(|e| match &e {
+        // the file's own key, and the FMI variable it sets
+        ParamsError::Invalid { key, .. } => match fmi_name_of_key(key) {
+            Some(name) => format!("{e} (FMI variable {name})"),
+            None => e.to_string(),
+        },
+        _ => e.to_string(),
+    })
 }
 
 #[no_mangle]
@@ -195,50 +312,72 @@ pub unsafe extern "C" fn fmi2Instantiate(
     _visible: fmi2Boolean,
     loggingOn: fmi2Boolean,
 ) -> fmi2Component {
+    if functions.is_null() {
+        return std::ptr::null_mut();
+    }
+    // SAFETY: non-null callbacks struct from the importer.
+    let cb = unsafe { *functions };
+    let name = unsafe { c_str(instanceName) };
+    // the component first, so that every refusal below reaches the importer's logger
+    let mut comp = Component {
+        instance: Instance::new(name.as_deref().unwrap_or(""), Params::trees_lab()),
+        logger: cb.logger,
+        environment: cb.componentEnvironment,
+        name: CString::new(name.clone().unwrap_or_default()).unwrap_or_default(),
+    };
+    // SAFETY: a non-null location is a NUL-terminated string from the importer.
+    let res = (!fmuResourceLocation.is_null())
+        .then(|| unsafe { CStr::from_ptr(fmuResourceLocation) }.to_bytes());
+    let guid = unsafe { c_str(fmuGUID) };
     let r = catch_unwind(AssertUnwindSafe(|| {
-        if functions.is_null() {
-            return std::ptr::null_mut();
+        instantiate(&mut comp, fmuType, guid.as_deref(), res)
+    }));
+    match r {
+        Ok(Ok(())) => {
+            comp.instance.logging_on = loggingOn != 0;
+            Box::into_raw(Box::new(comp)) as fmi2Component
         }
-        // SAFETY: non-null callbacks struct from the importer.
-        let cb = unsafe { *functions };
-        let name = unsafe { c_str(instanceName) };
-        let mut comp = Component {
-            instance: Instance::new(name.as_deref().unwrap_or(""), Params::trees_lab()),
-            logger: cb.logger,
-            environment: cb.componentEnvironment,
-            name: CString::new(name.clone().unwrap_or_default()).unwrap_or_default(),
-        };
-        let refuse = |comp: &Component, m: String| {
+        Ok(Err(m)) => {
             comp.log(ERROR, "logStatusError", &format!("fmi2Instantiate: {m}"));
             std::ptr::null_mut()
-        };
-        if name.as_deref().map(str::is_empty).unwrap_or(true) {
-            return refuse(&comp, "instanceName is null or empty".into());
         }
-        if fmuType != fmi2Type_fmi2CoSimulation {
-            return refuse(
-                &comp,
-                format!("fmuType {fmuType}: this FMU is Co-Simulation only"),
-            );
+        Err(_) => {
+            let m = "fmi2Instantiate: internal error (panic caught at the FMI boundary)";
+            comp.log(FATAL, "logStatusFatal", m);
+            std::ptr::null_mut()
         }
-        match unsafe { c_str(fmuGUID) } {
-            Some(g) if g == GUID => {}
-            g => {
-                return refuse(
-                    &comp,
-                    format!("GUID {g:?} does not match this binary's {GUID}"),
-                )
-            }
-        }
-        let res = unsafe { c_str(fmuResourceLocation) };
-        match start_params(res.as_deref()) {
-            Ok(p) => comp.instance = Instance::new(&comp.instance.name, p),
-            Err(e) => return refuse(&comp, format!("resources/parameters.toml: {e}")),
-        }
-        comp.instance.logging_on = loggingOn != 0;
-        Box::into_raw(Box::new(comp)) as fmi2Component
-    }));
-    r.unwrap_or(std::ptr::null_mut())
+    }
+}
+
+/// The checks of fmi2Instantiate and the start parameters; `Err` is the refusal's reason.
+fn instantiate(
+    comp: &mut Component,
+    fmu_type: fmi2Type,
+    guid: Option<&str>,
+    resources: Option<&[u8]>,
+) -> Result<(), String> {
+    if comp.instance.name.is_empty() {
+        return Err("instanceName is null or empty".into());
+    }
+    if fmu_type != fmi2Type_fmi2CoSimulation {
+        return Err(format!(
+            "fmuType {fmu_type}: this FMU is Co-Simulation only"
+        ));
+    }
+    if guid != Some(GUID) {
+        return Err(format!("GUID {guid:?} does not match this binary's {GUID}"));
+    }
+    let (params, warning) =
+        start_params(resources).map_err(|e| format!("resources/parameters.toml: {e}"))?;
+    if let Some(w) = warning {
+        comp.log(
+            WARNING,
+            "logStatusWarning",
+            &format!("fmi2Instantiate: {w}"),
+        );
+    }
+    comp.instance = Instance::new(&comp.instance.name, params);
+    Ok(())
 }
 
 #[no_mangle]
@@ -886,3 +1025,28 @@ const _: fmi2GetRealStatusTYPE = Some(fmi2GetRealStatus);
 const _: fmi2GetIntegerStatusTYPE = Some(fmi2GetIntegerStatus);
 const _: fmi2GetBooleanStatusTYPE = Some(fmi2GetBooleanStatus);
 const _: fmi2GetStringStatusTYPE = Some(fmi2GetStringStatus);
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use std::path::PathBuf;
+
+    #[test]
+    fn resource_uris_are_parsed_on_bytes() {
+        let p = |u: &[u8]| resource_path(u);
+        let ok = |s: &str| Ok(PathBuf::from(s));
+        assert_eq!(p(b"file:///a/b%20c"), ok("/a/b c"));
+        assert_eq!(p(b"file://localhost/a/b"), ok("/a/b"));
+        assert_eq!(p(b"FILE://LOCALHOST/a"), ok("/a"));
+        assert_eq!(p(b"file:/a/%C3%A9"), ok("/a/\u{e9}"));
+        assert_eq!(p(b"/plain/path"), ok("/plain/path"));
+        use ResourceUriError::*;
+        assert_eq!(p(b"file:///a%\xc3\xa9"), Err(BadEscape(2)));
+        assert_eq!(p(b"file:///a%4"), Err(BadEscape(2)));
+        assert_eq!(p(b"file:///a%00b"), Err(Nul));
+        assert_eq!(p(b"file://server/a"), Err(RemoteHost("server".into())));
+        assert_eq!(p(b"file:a"), Err(NotFile));
+        assert_eq!(p(b"http://x/a"), Err(NotFile));
+        assert_eq!(p(b""), Err(Empty));
+    }
+}

@@ -2,9 +2,9 @@
 //! checked against the state it is allowed in and against its arguments. The C exports
 //! (`export.rs`) only translate pointers and log the errors returned here.
 
-use super::variables::{by_vr, inputs_from, integer_allowed, Kind, Role};
+use super::variables::{by_vr, inputs_from, integer_allowed, Kind, Role, VARIABLES};
 use crate::model::SensorNoise;
-use crate::params::Params;
+use crate::params::{Params, ParamsError};
 use crate::solver::{CommandHistory, Simulator, DEFAULT_MAX_SUBSTEP_S};
 use crate::Model;
 
@@ -33,6 +33,57 @@ impl std::fmt::Display for FmiError {
 
 type Result<T> = std::result::Result<T, FmiError>;
 
+/// Accepted mismatch of `currentCommunicationPoint`, in units of the rounding error of the
+/// current time: an importer that accumulates `t += h` over millions of steps drifts by a
+/// few thousand ulps, while any real mismatch (a skipped or repeated step) is far larger.
+const COMM_POINT_ULPS: f64 = 4096.0;
+
+/// ... but never more than this fraction of the step: at t = 1e9 s the ulp allowance
+/// (1e-3 s) would otherwise accept a jump of a millisecond step.
+const COMM_POINT_STEP_FRACTION: f64 = 1e-3;
+
+/// A step whose representable end time `t + h` misses `h` by more than this fraction
+/// is refused: time cannot resolve the step there (at t = 1e20 s, `t + h == t`). Below
+/// it the rounding of the end time is the usual drift of a double time axis (at
+/// t = 1e9 s a 1 ms step is off by 1e-4 of itself).
+const TIME_RESOLUTION_FRACTION: f64 = 0.01;
+
+/// Largest accepted `|currentCommunicationPoint - time|` for a step of `h` at `time`.
+fn comm_point_tolerance(time: f64, h: f64) -> f64 {
+    (COMM_POINT_ULPS * f64::EPSILON * time.abs().max(1.0)).min(COMM_POINT_STEP_FRACTION * h)
+}
+
+/// The FMI variable name of a parameter-file key (`table.mass_kg` -> `table.mass`), found
+/// by writing a marker through each variable's setter; `None` for a key with no variable.
+pub fn fmi_name_of_key(key: &str) -> Option<&'static str> {
+    const MARKER: f64 = -8.125e-7;
+    VARIABLES.iter().find_map(|v| match v.role {
+        Role::Parameter(_, set) if v.kind == Kind::Real => {
+            let mut p = Params::trees_lab();
+            set(&mut p, MARKER);
+            let hit = p
+                .numeric_entries()
+                .iter()
+                .any(|&(k, x)| k == key && x == MARKER);
+            hit.then_some(v.name)
+        }
+        _ => None,
+    })
+}
+
+/// A parameter error in the FMU's words: the FMI variable name, not the TOML key.
+pub fn params_message(e: &ParamsError) -> String {
+    match e {
+        ParamsError::Invalid {
+            key, value, rule, ..
+        } => {
+            let name = fmi_name_of_key(key).unwrap_or(key);
+            format!("{name} = {value}: {rule}")
+        }
+        other => other.to_string(),
+    }
+}
+
 /// Everything an FMU state snapshot holds (get/set/serialize FMUstate).
 #[derive(Debug, Clone, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct Snapshot {
@@ -45,6 +96,31 @@ pub struct Snapshot {
     /// The simulator's state vector and command history (after initialization).
     pub state: Option<Vec<f64>>,
     pub history: Vec<(f64, f64)>,
+}
+
+impl Snapshot {
+    /// Every number of a state must be finite: a NaN time or state would step on silently.
+    pub fn check_finite(&self) -> std::result::Result<(), String> {
+        let named: [(&str, &[f64]); 4] = [
+            ("time", &[self.time_s, self.start_time_s]),
+            ("input values", &self.inputs),
+            ("input derivatives", &self.input_slopes),
+            ("model state", self.state.as_deref().unwrap_or(&[])),
+        ];
+        for (what, xs) in named {
+            if let Some(x) = xs.iter().find(|x| !x.is_finite()) {
+                return Err(format!("the FMU state holds a non-finite {what} ({x})"));
+            }
+        }
+        if self
+            .history
+            .iter()
+            .any(|(t, u)| !(t.is_finite() && u.is_finite()))
+        {
+            return Err("the FMU state holds a non-finite valve command history".into());
+        }
+        Ok(())
+    }
 }
 
 /// An FMU instance.
@@ -126,7 +202,7 @@ impl Instance {
         const F: &str = "fmi2ExitInitializationMode";
         self.allowed(F, &[Phase::InitializationMode])?;
         if let Err(e) = self.params.validate() {
-            return err(F, format!("invalid parameters: {e}"));
+            return err(F, format!("invalid parameters: {}", params_message(&e)));
         }
         self.sim = Some(Simulator::new(
             Model::new(&self.params),
@@ -237,6 +313,7 @@ impl Instance {
         )?;
         let mut params = self.params;
         let mut inputs = self.inputs;
+        let mut slopes = self.input_slopes;
         for (&vr, &x) in vrs.iter().zip(values) {
             let v = Self::variable(function, vr, kind)?;
             match v.role {
@@ -245,6 +322,8 @@ impl Instance {
                         return err(function, format!("input {} = {x} is not finite", v.name));
                     }
                     inputs[k] = x;
+                    // FMI 2.0 (4.2.1): a new input value ends the derivative set for it
+                    slopes[k] = 0.0;
                 }
                 Role::Output(_) => {
                     return err(
@@ -283,10 +362,13 @@ impl Instance {
         }
         self.params = params;
         self.inputs = inputs;
+        self.input_slopes = slopes;
         Ok(())
     }
 
-    /// fmi2SetRealInputDerivatives: first-order slopes of the inputs for the next step.
+    /// fmi2SetRealInputDerivatives: first-order slopes of the inputs for the next
+    /// fmi2DoStep only (FMI 2.0 section 4.2.1: the derivatives belong to the inputs set for
+    /// that communication step; the step consumes them and a new input value clears them).
     pub fn set_input_derivatives(
         &mut self,
         vrs: &[u32],
@@ -330,20 +412,33 @@ impl Instance {
                 format!("communicationStepSize {h} must be finite and > 0"),
             );
         }
-        let tol = 1e-9 * self.time_s.abs().max(1.0);
+        let tol = comm_point_tolerance(self.time_s, h);
         if !t.is_finite() || (t - self.time_s).abs() > tol {
             return err(
                 F,
                 format!(
-                    "currentCommunicationPoint {t} is not the current time {}",
+                    "currentCommunicationPoint {t} is not the current time {} (tolerance {tol:e} s)",
                     self.time_s
                 ),
             );
         }
+        let advance = (t + h) - t;
+        if (advance - h).abs() > TIME_RESOLUTION_FRACTION * h {
+            return err(
+                F,
+                format!(
+                    "communicationStepSize {h} s cannot be resolved at time {t} s \
+                     (t + h - t = {advance} s in double precision); time cannot advance"
+                ),
+            );
+        }
         let from = inputs_from(&self.inputs);
-        let mut end = self.inputs;
-        for k in 0..4 {
-            end[k] += self.input_slopes[k] * h;
+        let end: [f64; 4] = std::array::from_fn(|k| self.inputs[k] + self.input_slopes[k] * h);
+        if end.iter().any(|x| !x.is_finite()) {
+            return err(
+                F,
+                "inputs extrapolated with their derivatives are not finite",
+            );
         }
         let to = inputs_from(&end);
         let Some(sim) = self.sim.as_mut() else {
@@ -357,6 +452,10 @@ impl Instance {
             return err(F, why);
         }
         self.time_s = sim.time_s;
+        // the step applied the inputs up to its end: outputs and later steps start there,
+        // and the derivatives were for this step only
+        self.inputs = end;
+        self.input_slopes = [0.0; 4];
         Ok(())
     }
 
@@ -390,7 +489,13 @@ impl Instance {
             ],
         )?;
         if let Err(e) = s.params.validate() {
-            return err(F, format!("the state holds invalid parameters: {e}"));
+            return err(
+                F,
+                format!("the state holds invalid parameters: {}", params_message(&e)),
+            );
+        }
+        if let Err(why) = s.check_finite() {
+            return err(F, why);
         }
         self.sim = match &s.state {
             Some(x) => {
@@ -422,12 +527,21 @@ impl Instance {
     }
 }
 
-/// Serialised FMU state: a tag, then JSON with every float as its bit pattern so the
-/// round trip is exact.
+/// Tag of a serialised FMU state.
+pub const STATE_FORMAT: &str = "shaketable-fmustate";
+
+/// Version of the serialised layout and meaning. 2: input derivatives apply to one step
+/// only (version 1 states carried derivatives that kept acting, so they are refused).
+pub const STATE_FORMAT_VERSION: u64 = 2;
+
+/// Serialised FMU state: a format tag and version, then JSON with every float as its bit
+/// pattern so the round trip is exact.
 pub fn serialize(s: &Snapshot) -> Vec<u8> {
     let bits = |x: f64| x.to_bits();
     let v = serde_json::json!({
-        "format": "shaketable-fmustate-1",
+        "format": STATE_FORMAT,
+        "version": STATE_FORMAT_VERSION,
+        "writer": concat!("shaketable ", env!("CARGO_PKG_VERSION")),
         "phase": s.phase,
         "params": s.params.to_toml_string(),
         "time": bits(s.time_s),
@@ -440,12 +554,39 @@ pub fn serialize(s: &Snapshot) -> Vec<u8> {
     v.to_string().into_bytes()
 }
 
+/// The format version of a serialised state: the tag of this format (or the version-1
+/// tag `shaketable-fmustate-1`), and a version equal to ours; a mismatch names both.
+fn check_format(v: &serde_json::Value) -> std::result::Result<(), String> {
+    let found = match v["format"].as_str() {
+        Some(STATE_FORMAT) => v["version"].as_u64(),
+        Some(tag) => match tag.strip_prefix("shaketable-fmustate-") {
+            Some(n) => n.parse::<u64>().ok(),
+            None => {
+                return Err(format!(
+                "not a serialized ShakeTable state (format tag {tag:?}, expected {STATE_FORMAT:?})"
+            ))
+            }
+        },
+        None => return Err("not a serialized ShakeTable state (no format tag)".into()),
+    };
+    let writer = v["writer"].as_str().unwrap_or("an earlier shaketable");
+    match found {
+        Some(STATE_FORMAT_VERSION) => Ok(()),
+        Some(n) => Err(format!(
+            "serialized state format version {n} (written by {writer}), this FMU reads version \
+             {STATE_FORMAT_VERSION} (shaketable {}): save the state again with this FMU",
+            env!("CARGO_PKG_VERSION")
+        )),
+        None => Err(format!(
+            "serialized state has no valid format version (expected {STATE_FORMAT_VERSION})"
+        )),
+    }
+}
+
 pub fn deserialize(bytes: &[u8]) -> std::result::Result<Snapshot, String> {
     let v: serde_json::Value = serde_json::from_slice(bytes)
         .map_err(|e| format!("not a serialized ShakeTable state: {e}"))?;
-    if v["format"] != "shaketable-fmustate-1" {
-        return Err("not a serialized ShakeTable state (format tag missing)".into());
-    }
+    check_format(&v)?;
     let f = |x: &serde_json::Value| -> std::result::Result<f64, String> {
         x.as_u64()
             .map(f64::from_bits)
@@ -459,7 +600,7 @@ pub fn deserialize(bytes: &[u8]) -> std::result::Result<Snapshot, String> {
         v["params"].as_str().ok_or("missing params")?,
         "<serialized state>",
     )
-    .map_err(|e| e.to_string())?;
+    .map_err(|e| params_message(&e))?;
     let state = match &v["state"] {
         serde_json::Value::Null => None,
         x => Some(
@@ -482,7 +623,7 @@ pub fn deserialize(bytes: &[u8]) -> std::result::Result<Snapshot, String> {
             Ok((f(&a[0])?, f(&a[1])?))
         })
         .collect::<std::result::Result<Vec<_>, String>>()?;
-    Ok(Snapshot {
+    let snap = Snapshot {
         phase: serde_json::from_value(v["phase"].clone()).map_err(|e| e.to_string())?,
         params,
         time_s: f(&v["time"])?,
@@ -491,7 +632,9 @@ pub fn deserialize(bytes: &[u8]) -> std::result::Result<Snapshot, String> {
         input_slopes: arr4(&v["slopes"])?,
         state,
         history,
-    })
+    };
+    snap.check_finite()?;
+    Ok(snap)
 }
 
 #[cfg(test)]
