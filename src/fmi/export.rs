@@ -424,7 +424,16 @@ pub unsafe extern "C" fn fmi2ExitInitializationMode(c: fmi2Component) -> fmi2Sta
     unsafe {
         with(c, |comp| {
             let r = comp.instance.exit_initialization_mode();
-            comp.result(r)
+            let status = comp.result(r);
+            // spec section 8: an unstable closed loop is named before the first step
+            match crate::linear::stability_warning(&comp.instance.params) {
+                Some(w) if status == OK => {
+                    let message = format!("fmi2ExitInitializationMode: {w}");
+                    comp.log(WARNING, "logStatusWarning", &message);
+                    WARNING
+                }
+                _ => status,
+            }
         })
     }
 }

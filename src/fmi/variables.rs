@@ -509,6 +509,21 @@ pub static VARIABLES: &[Variable] = &[
         "Deadband d (fraction of full spool)",
         valve_deadband.deadband
     ),
+    // operating limits (spec section 8): fmi2DoStep stops beyond them with fmi2Error
+    real_param!(
+        190,
+        "limits.stroke",
+        Some("m"),
+        "Stroke: a step whose LVDT displacement passes 1.1 times it is an error",
+        limits.stroke_m
+    ),
+    real_param!(
+        191,
+        "limits.velocity",
+        Some("m/s"),
+        "Velocity limit: a step whose table speed passes twice it is an error",
+        limits.velocity_m_s
+    ),
 ];
 
 /// The variable with value reference `vr`.
