@@ -30,9 +30,10 @@ pub enum Refusal {
     Io(std::io::Error),
     /// Not a regular file: what it is ("a FIFO (named pipe)", "a directory", ...).
     NotRegular(&'static str),
-    /// Larger than `limit` bytes (`size` as seen before or while reading).
+    /// Larger than `limit` bytes: `size` from its metadata, or `None` when it grew past
+    /// the limit while being read.
     TooLarge {
-        size: u64,
+        size: Option<u64>,
         limit: u64,
         what: &'static str,
     },
@@ -46,10 +47,18 @@ impl std::fmt::Display for Refusal {
                 f,
                 "is {kind}, not a regular file: only regular files are read (refused before opening)"
             ),
-            Refusal::TooLarge { size, limit, what } => write!(
-                f,
-                "is {size} bytes or more, larger than the {what} ({limit} bytes); refused before reading"
-            ),
+            Refusal::TooLarge { size, limit, what } => {
+                let gib = |b: u64| b as f64 / (1u64 << 30) as f64;
+                match size {
+                    Some(s) => write!(f, "is {s} bytes ({:.2} GiB), ", gib(*s))?,
+                    None => write!(f, "grew while being read and is ")?,
+                }
+                write!(
+                    f,
+                    "larger than the {what} ({limit} bytes, {:.3} GiB); refused before reading",
+                    gib(*limit)
+                )
+            }
         }
     }
 }
@@ -80,7 +89,7 @@ fn check_meta(m: &std::fs::Metadata, limit: u64, what: &'static str) -> Result<(
     }
     if m.len() > limit {
         return Err(Refusal::TooLarge {
-            size: m.len(),
+            size: Some(m.len()),
             limit,
             what,
         });
@@ -108,7 +117,7 @@ pub fn read_regular(path: &Path, limit: u64, what: &'static str) -> Result<Vec<u
         .map_err(Refusal::Io)?;
     if bytes.len() as u64 > limit {
         return Err(Refusal::TooLarge {
-            size: bytes.len() as u64,
+            size: None,
             limit,
             what,
         });

@@ -421,9 +421,10 @@ fn check_time(
                 return Err(err(
                     t.row_lines[1],
                     format!(
-                        "sample rate disagrees: time column gives {} Hz, {rate_source} says {fs} Hz \
+                        "sample rate disagrees: time column gives {} Hz, {rate_source} says {} Hz \
                          (more than {} % apart)",
-                        round_sig(clock, 7),
+                        num(round_sig(clock, 7)),
+                        num(fs),
                         RATE_TOLERANCE * 100.0
                     ),
                 ));
@@ -440,31 +441,48 @@ fn check_time(
         }
     };
     if let Some(k) = grid.first_off_grid(time) {
-        let expected = grid.t0 + k as f64 * grid.step;
+        let expected = grid.at(k as f64);
+        // a start at 0 shows as 0, not as the fit's rounding residue
+        let t0 = if grid.t0.abs() < 1e-6 * grid.step {
+            0.0
+        } else {
+            grid.t0
+        };
         return Err(err(
             t.row_lines[k],
             format!(
                 "non-uniform time: sample {k} is at time_s = {} but the time column's own \
                  uniform grid ({} Hz from {}) puts it at {} (step here {} s, expected {} s)",
                 time[k],
-                round_sig(grid.rate_hz(), 7),
-                round_sig(grid.t0, 9),
-                round_sig(expected, 9),
-                round_sig(if k > 0 { time[k] - time[k - 1] } else { 0.0 }, 6),
-                round_sig(grid.step, 6),
+                num(round_sig(grid.rate_hz(), 7)),
+                num(t0),
+                num(expected),
+                num(round_sig(
+                    if k > 0 { time[k] - time[k - 1] } else { 0.0 },
+                    6
+                )),
+                num(round_sig(grid.step, 6)),
             ),
         ));
     }
     Ok(fs)
 }
 
-/// `x` rounded to `digits` significant digits (for messages).
-fn round_sig(x: f64, digits: i32) -> f64 {
-    if x == 0.0 || !x.is_finite() {
-        return x;
+/// `x` for a message: 9 significant digits, exponent notation when very large or small.
+fn num(x: f64) -> String {
+    let r = round_sig(x, 9);
+    if r != 0.0 && r.is_finite() && (r.abs() >= 1e7 || r.abs() < 1e-4) {
+        format!("{r:e}")
+    } else {
+        format!("{r}")
     }
-    let scale = 10f64.powi(digits - 1 - x.abs().log10().floor() as i32);
-    (x * scale).round() / scale
+}
+
+/// `x` rounded to `digits` significant digits (for messages).
+fn round_sig(x: f64, digits: usize) -> f64 {
+    format!("{x:.*e}", digits.saturating_sub(1))
+        .parse()
+        .unwrap_or(x)
 }
 
 /// The uniform grid a time column follows: `t0 + j * step`, fitted by least squares over
@@ -914,12 +932,13 @@ fn broken(x: f64, check: Check) -> Option<String> {
     match check {
         Check::Within(_) if !x.is_finite() => Some(format!("{x} must be finite")),
         Check::Within(b) if b.min > 0.0 && x <= 0.0 => {
-            Some(format!("{x} must be a finite number > 0"))
+            Some(format!("{} must be a finite number > 0", num(x)))
         }
         Check::Within(b) if !(x >= b.min && x <= b.max) => Some(format!(
-            "{x} {u} is outside the plausible range {} to {} {u}",
-            b.min,
-            b.max,
+            "{} {u} is outside the plausible range {} to {} {u}",
+            num(x),
+            num(b.min),
+            num(b.max),
             u = b.unit
         )),
         _ => None,
