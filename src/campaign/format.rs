@@ -15,11 +15,22 @@
 //! - Duplicate test names, two tests on one file, and a campaign without tests are errors.
 //! - CSV: blank lines and lines whose first non-blank character is `#` are skipped;
 //!   cells are trimmed and may be double-quoted; a duplicate channel name is an error.
-//! - Time: strictly increasing; the median step must match `1/sample_rate_hz` within
-//!   0.1 % (else "sample rate disagrees"), and every sample must lie within 1 % of a step
-//!   of its grid time `t0 + k/fs` (else "non-uniform time": gaps, jitter, drift). The
-//!   record may start at any t0.
+//! - Time: strictly increasing; the rate of the time column's own uniform grid (a least
+//!   squares fit, gaps counted as whole steps) must match `sample_rate_hz` within 0.1 %
+//!   (else "sample rate disagrees"; a smaller offset is accepted, never accumulated into
+//!   jitter), and every sample must lie within 1 % of a step of that grid (else
+//!   "non-uniform time": gaps, jitter, drift). The record may start at any t0.
+//! - Files (see [`super::files`]): only regular files inside the campaign folder, within
+//!   [`MAX_RECORD_BYTES`] / [`MAX_TOML_BYTES`], UTF-8; lines end at LF, CRLF or a lone CR.
+//! - campaign.toml values must lie in plausible physical ranges (named bounds below), and
+//!   test files are compared after normalisation (`./R1.csv` is `R1.csv`; symlinks and
+//!   hard links to one file are one file).
 
+use super::files::{
+    decode_utf8, lines_any, lone_cr_to_lf, normalise_relative, read_regular, resolve_inside,
+    Refusal,
+};
+pub use super::files::{MAX_RECORD_BYTES, MAX_TOML_BYTES};
 use super::{
     Campaign, CampaignInfo, Control, ControllerOverride, Geometry, Record, TestKind, TestSpec,
 };
@@ -52,9 +63,12 @@ pub const REFERENCE_CHANNELS: [&str; 4] = [
 /// The optional spool channel.
 pub const SPOOL_CHANNEL: &str = "spool_position";
 
-/// Relative tolerance of the mean time step against `1/sample_rate_hz`.
+/// Relative tolerance of the time column's rate against `sample_rate_hz`: 0.1 %
+/// (campaign-format.md, "a sample rate that disagrees with a time column by more than
+/// 0.1 %"). A smaller offset is a clock tolerance and is accepted.
 const RATE_TOLERANCE: f64 = 1e-3;
-/// Tolerance of each sample time against its grid time, in sample intervals.
+/// Tolerance of each sample time against the time column's own fitted uniform grid, in
+/// sample intervals: jitter, gaps and drift beyond 1 % of a step are "non-uniform time".
 const GRID_TOLERANCE: f64 = 1e-2;
 
 /// Everything that can be wrong with a campaign on disk.
@@ -91,6 +105,10 @@ pub enum CampaignError {
         key: Option<String>,
         message: String,
     },
+    /// A file refused before it is read: not a regular file (FIFO, device, directory,
+    /// socket) or larger than any plausible one.
+    #[error("{file}: {message}")]
+    Refused { file: String, message: String },
     /// An in-memory record or campaign that cannot be written in the format.
     #[error("{file}: {message}")]
     Invalid { file: String, message: String },
@@ -130,6 +148,7 @@ impl CampaignError {
             | CampaignError::Write { file, .. }
             | CampaignError::Csv { file, .. }
             | CampaignError::Toml { file, .. }
+            | CampaignError::Refused { file, .. }
             | CampaignError::Invalid { file, .. } => file,
             CampaignError::Output(e) => e.path(),
         }
@@ -140,11 +159,47 @@ fn display(p: &Path) -> String {
     p.display().to_string()
 }
 
-fn read_text(path: &Path) -> Result<String, CampaignError> {
-    std::fs::read_to_string(path).map_err(|source| CampaignError::Read {
-        file: display(path),
-        source,
+/// A record or campaign.toml as text: a regular file within its size bound, UTF-8 (an
+/// invalid byte is an error at its line and column).
+fn read_text(path: &Path, toml: bool) -> Result<String, CampaignError> {
+    let file = display(path);
+    let (limit, what) = if toml {
+        (MAX_TOML_BYTES, "largest plausible campaign.toml")
+    } else {
+        (MAX_RECORD_BYTES, "largest plausible record")
+    };
+    let bytes = read_regular(path, limit, what).map_err(|r| refusal(&file, r))?;
+    decode_utf8(bytes).map_err(|b| {
+        if toml {
+            CampaignError::Toml {
+                file,
+                line: Some(b.line),
+                test: None,
+                key: None,
+                message: b.to_string(),
+            }
+        } else {
+            CampaignError::Csv {
+                file,
+                line: b.line,
+                message: b.to_string(),
+            }
+        }
     })
+}
+
+/// A file refused by [`read_regular`], as the error naming it.
+fn refusal(file: &str, r: Refusal) -> CampaignError {
+    match r {
+        Refusal::Io(source) => CampaignError::Read {
+            file: file.to_string(),
+            source,
+        },
+        other => CampaignError::Refused {
+            file: file.to_string(),
+            message: other.to_string(),
+        },
+    }
 }
 
 // ---------------------------------------------------------------------------------------
@@ -194,9 +249,8 @@ fn parse_csv(text: &str, file: &str) -> Result<CsvTable, CampaignError> {
     let mut last_line = 0usize;
     // a UTF-8 byte-order mark (spreadsheet exports) is not part of the first channel name
     let text = text.strip_prefix('\u{feff}').unwrap_or(text);
-    for (i, raw) in text.split('\n').enumerate() {
+    for (i, line) in lines_any(text).enumerate() {
         let line_no = i + 1;
-        let line = raw.strip_suffix('\r').unwrap_or(raw);
         let trimmed = line.trim_start();
         if trimmed.is_empty() {
             continue;
@@ -324,8 +378,9 @@ fn require_channels(t: &CsvTable, required: &[&str], file: &str) -> Result<(), C
     })
 }
 
-/// Check the time column: strictly increasing, uniform at `sample_rate_hz` (or, when
-/// `None`, at the rate its mean step implies). Returns the sample rate.
+/// Check the time column: strictly increasing; its own rate (see [`TimeGrid`]) within
+/// [`RATE_TOLERANCE`] of `sample_rate_hz` (or, when `None`, taken as the rate); every
+/// sample on its uniform grid. Returns the sample rate.
 fn check_time(
     t: &CsvTable,
     time: &[f64],
@@ -361,28 +416,26 @@ fn check_time(
             )),
         };
     }
-    // the typical step: the median, so that a gap or a jittered sample is reported as
-    // non-uniform time rather than as a wrong sample rate
-    let mut steps: Vec<f64> = time.windows(2).map(|w| w[1] - w[0]).collect();
-    let mid = steps.len() / 2;
-    let (_, &mut step, _) = steps.select_nth_unstable_by(mid, f64::total_cmp);
+    let grid = TimeGrid::fit(time);
     let fs = match sample_rate_hz {
         Some(fs) => {
-            let dt = 1.0 / fs;
-            if ((step - dt) / dt).abs() > RATE_TOLERANCE {
+            let clock = grid.rate_hz();
+            if ((clock - fs) / fs).abs() > RATE_TOLERANCE {
                 return Err(err(
                     t.row_lines[1],
                     format!(
-                        "sample rate disagrees with the time column: time_s steps by {step} s \
-                         ({} Hz) but {rate_source} is {fs} Hz",
-                        1.0 / step
+                        "sample rate disagrees: time column gives {} Hz, {rate_source} says {} Hz \
+                         (more than {} % apart)",
+                        num(round_sig(clock, 7)),
+                        num(fs),
+                        RATE_TOLERANCE * 100.0
                     ),
                 ));
             }
             fs
         }
         None => {
-            let fs = 1.0 / step;
+            let fs = grid.rate_hz();
             if (fs - fs.round()).abs() < 1e-6 * fs {
                 fs.round()
             } else {
@@ -390,22 +443,140 @@ fn check_time(
             }
         }
     };
-    let dt = 1.0 / fs;
-    let t0 = time[0];
-    for (k, &tk) in time.iter().enumerate() {
-        let expected = t0 + k as f64 * dt;
-        if (tk - expected).abs() > GRID_TOLERANCE * dt {
-            return Err(err(
-                t.row_lines[k],
-                format!(
-                    "non-uniform time: sample {k} is at time_s = {tk} but uniform sampling at \
-                     {fs} Hz from {t0} puts it at {expected} (step here {} s, expected {dt} s)",
-                    if k > 0 { tk - time[k - 1] } else { 0.0 }
-                ),
-            ));
-        }
+    if let Some(k) = grid.first_off_grid(time) {
+        let expected = grid.at(k as f64);
+        // a start at 0 shows as 0, not as the fit's rounding residue
+        let t0 = if grid.t0.abs() < 1e-6 * grid.step {
+            0.0
+        } else {
+            grid.t0
+        };
+        return Err(err(
+            t.row_lines[k],
+            format!(
+                "non-uniform time: sample {k} is at time_s = {} but the time column's own \
+                 uniform grid ({} Hz from {}) puts it at {} (step here {} s, expected {} s)",
+                time[k],
+                num(round_sig(grid.rate_hz(), 7)),
+                num(t0),
+                num(expected),
+                num(round_sig(
+                    if k > 0 { time[k] - time[k - 1] } else { 0.0 },
+                    6
+                )),
+                num(round_sig(grid.step, 6)),
+            ),
+        ));
     }
     Ok(fs)
+}
+
+/// `x` for a message: 9 significant digits, exponent notation when very large or small.
+fn num(x: f64) -> String {
+    let r = round_sig(x, 9);
+    if r != 0.0 && r.is_finite() && (r.abs() >= 1e7 || r.abs() < 1e-4) {
+        format!("{r:e}")
+    } else {
+        format!("{r}")
+    }
+}
+
+/// `x` rounded to `digits` significant digits (for messages).
+fn round_sig(x: f64, digits: usize) -> f64 {
+    format!("{x:.*e}", digits.saturating_sub(1))
+        .parse()
+        .unwrap_or(x)
+}
+
+/// The uniform grid a time column follows: `t0 + j * step`, fitted by least squares over
+/// every sample, where `j` counts steps of the median step (so a gap counts as two steps
+/// and does not bias the fit). The rate rule compares `1 / step` with the declared rate;
+/// the uniformity rule compares each sample with this grid, so a small constant rate
+/// offset never accumulates into "non-uniform time", and jitter, gaps and drift still do.
+#[derive(Clone, Copy)]
+struct TimeGrid {
+    t0: f64,
+    step: f64,
+    median: f64,
+}
+
+impl TimeGrid {
+    /// Fit the grid of a strictly increasing time column of at least 2 samples: a least
+    /// squares line, then again without the samples off that line (so one late sample
+    /// does not tilt the grid of a short record).
+    fn fit(time: &[f64]) -> TimeGrid {
+        let mut steps: Vec<f64> = time.windows(2).map(|w| w[1] - w[0]).collect();
+        let mid = steps.len() / 2;
+        let (_, &mut median, _) = steps.select_nth_unstable_by(mid, f64::total_cmp);
+        let first = TimeGrid {
+            t0: time[0],
+            step: median,
+            median,
+        }
+        .refit(time, None);
+        first.refit(time, Some(GRID_TOLERANCE * first.step))
+    }
+
+    /// The least-squares grid of the samples within `tol` of this grid (all if `None`).
+    fn refit(&self, time: &[f64], tol: Option<f64>) -> TimeGrid {
+        let keep = |j: f64, t: f64| tol.map_or(true, |tol| (t - self.at(j)).abs() <= tol);
+        let (mut n, mut sj, mut st) = (0.0, 0.0, 0.0);
+        for (j, &t) in self.indices(time).zip(time) {
+            if keep(j, t) {
+                (n, sj, st) = (n + 1.0, sj + j, st + t);
+            }
+        }
+        let (mj, mt) = (sj / n, st / n);
+        let (mut sjt, mut sjj) = (0.0, 0.0);
+        for (j, &t) in self.indices(time).zip(time) {
+            if keep(j, t) {
+                sjt += (j - mj) * (t - mt);
+                sjj += (j - mj) * (j - mj);
+            }
+        }
+        if !(n >= 2.0 && sjj > 0.0 && sjt > 0.0) {
+            return *self;
+        }
+        let step = sjt / sjj;
+        TimeGrid {
+            t0: mt - step * mj,
+            step,
+            median: self.median,
+        }
+    }
+
+    /// The grid time of index `j`.
+    fn at(&self, j: f64) -> f64 {
+        self.t0 + j * self.step
+    }
+
+    fn rate_hz(&self) -> f64 {
+        1.0 / self.step
+    }
+
+    /// The grid index of every sample: each step counts as a whole number of median
+    /// steps (1 normally, 2 across a missing sample), added one step at a time so that
+    /// a small rate offset never rounds to the wrong index.
+    fn indices<'a>(&self, time: &'a [f64]) -> impl Iterator<Item = f64> + 'a {
+        let median = self.median;
+        let mut j = 0.0;
+        let mut prev = time[0];
+        time.iter().map(move |&t| {
+            j += ((t - prev) / median).round();
+            prev = t;
+            j
+        })
+    }
+
+    /// The first sample off its place `t0 + k * step` by more than [`GRID_TOLERANCE`]
+    /// of a step (jitter, drift), or where a step is not one step (a gap, a doubled sample).
+    fn first_off_grid(&self, time: &[f64]) -> Option<usize> {
+        let tol = GRID_TOLERANCE * self.step;
+        self.indices(time)
+            .zip(time)
+            .enumerate()
+            .position(|(k, (j, &t))| j != k as f64 || (t - self.at(j)).abs() > tol)
+    }
 }
 
 fn record_from_table(mut t: CsvTable) -> Record {
@@ -448,7 +619,7 @@ fn record_from_table(mut t: CsvTable) -> Record {
 /// Read one record, checking every rule of the format page against `sample_rate_hz`.
 pub fn read_record(path: &Path, sample_rate_hz: f64) -> Result<Record, CampaignError> {
     let file = display(path);
-    let text = read_text(path)?;
+    let text = read_text(path, false)?;
     read_record_str(&text, &file, sample_rate_hz, "sample_rate_hz")
 }
 
@@ -501,7 +672,7 @@ pub fn read_reference(
     sample_rate_hz: Option<f64>,
 ) -> Result<ReferenceRecord, CampaignError> {
     let file = display(path);
-    let text = read_text(path)?;
+    let text = read_text(path, false)?;
     let mut table = parse_csv(&text, &file)?;
     require_channels(&table, &REFERENCE_CHANNELS, &file)?;
     let time = table.take("time_s").unwrap_or_default();
@@ -674,10 +845,116 @@ fn as_number(v: &toml::Value) -> Option<f64> {
     }
 }
 
+/// A plausible physical range (inclusive) of a campaign.toml value. The ranges are wide
+/// (orders of magnitude beyond any real table either way): what they catch is a unit slip
+/// (mm^2 for m^2) or a typo, and values like 1e300 that would overflow to `inf` downstream.
+#[derive(Clone, Copy)]
+struct Bound {
+    min: f64,
+    max: f64,
+    unit: &'static str,
+}
+
+/// Piston area: 1 mm^2 to 10 m^2 (a 3.6 m bore). TREES Lab: 0.0911 m^2; the largest
+/// tables' actuators are around 0.2 m^2; a bench-top actuator is a few cm^2.
+const PISTON_AREA_M2: Bound = Bound {
+    min: 1e-6,
+    max: 10.0,
+    unit: "m^2",
+};
+/// Total oil volume: 1 mL to 100 m^3 (TREES Lab: 0.121 m^3).
+const OIL_VOLUME_M3: Bound = Bound {
+    min: 1e-6,
+    max: 100.0,
+    unit: "m^3",
+};
+/// Supply pressure: 1 bar to 1 GPa (industrial hydraulics run at 7 to 35 MPa).
+const SUPPLY_PRESSURE_PA: Bound = Bound {
+    min: 1e5,
+    max: 1e9,
+    unit: "Pa",
+};
+/// Valve flow gain (flow at full spool): 1 mL/s to 100 m^3/s (TREES Lab: 0.2 m^3/s, the
+/// largest tables a few m^3/s in total).
+const FLOW_GAIN_M3_S: Bound = Bound {
+    min: 1e-6,
+    max: 100.0,
+    unit: "m^3/s",
+};
+/// Sample rate: 1 Hz to 1 MHz (controllers sample at 0.5 to 10 kHz, fast DAQs 100 kHz).
+const SAMPLE_RATE_HZ: Bound = Bound {
+    min: 1.0,
+    max: 1e6,
+    unit: "Hz",
+};
+/// A test frequency (sine, triangle, band edge): from 1e-4 Hz (a period of 2.8 hours,
+/// longer than any test) up to the Nyquist frequency (checked separately).
+const TEST_FREQUENCY_HZ: Bound = Bound {
+    min: 1e-4,
+    max: 5e5,
+    unit: "Hz",
+};
+/// A displacement level (amplitude, RMS): 1 nm (below any LVDT's resolution) to 10 m
+/// (ten times the longest strokes, +-1 m).
+const DISPLACEMENT_M: Bound = Bound {
+    min: 1e-9,
+    max: 10.0,
+    unit: "m",
+};
+/// An acceleration level (RMS): 1 micro-g to 1000 g (a hundred times the strongest tables).
+const ACCELERATION_M_S2: Bound = Bound {
+    min: 1e-5,
+    max: 1e4,
+    unit: "m/s^2",
+};
+/// Largest magnitude of each TVC gain (spec section 2, u normalised to [-1, 1]): the gain
+/// that opens the valve fully for an error of 1 nm, 1 nm/s, 1 nm/s^2 or 1 micro-newton,
+/// a thousand times finer than any table's sensors resolve. The sign is not restricted
+/// here: an unstable loop is reported by the stability check, not as a format error.
+const GAIN_LIMITS: [(&str, f64, &str); 6] = [
+    ("kp", 1e9, "1/m"),
+    ("kv", 1e9, "s/m"),
+    ("ka", 1e9, "s^2/m"),
+    ("fv", 1e9, "s/m"),
+    ("fa", 1e9, "s^2/m"),
+    ("kdp", 1e6, "1/N"),
+];
+
 #[derive(Clone, Copy)]
 enum Check {
-    Positive,
-    Finite,
+    Within(Bound),
+}
+
+/// `x` broken by `check`: the rule it breaks.
+fn broken(x: f64, check: Check) -> Option<String> {
+    match check {
+        Check::Within(_) if !x.is_finite() => Some(format!("{x} must be finite")),
+        Check::Within(b) if b.min > 0.0 && x <= 0.0 => {
+            Some(format!("{} must be a finite number > 0", num(x)))
+        }
+        Check::Within(b) if !(x >= b.min && x <= b.max) => Some(format!(
+            "{} {u} is outside the plausible range {} to {} {u}",
+            num(x),
+            num(b.min),
+            num(b.max),
+            u = b.unit
+        )),
+        _ => None,
+    }
+}
+
+/// The magnitude bound of gain `key`, as a check.
+fn gain_check(key: &str) -> Check {
+    let (_, max, unit) = GAIN_LIMITS
+        .iter()
+        .find(|(k, _, _)| *k == key)
+        .copied()
+        .unwrap_or(("", f64::MAX, ""));
+    Check::Within(Bound {
+        min: -max,
+        max,
+        unit,
+    })
 }
 
 /// A number from a spanned value, checked.
@@ -697,18 +974,10 @@ fn number(
             format!("expected a number, found {}", type_name(v.get_ref())),
         )
     })?;
-    let ok = match check {
-        Check::Positive => x.is_finite() && x > 0.0,
-        Check::Finite => x.is_finite(),
-    };
-    if !ok {
-        let rule = match check {
-            Check::Positive => "must be a finite number > 0",
-            Check::Finite => "must be finite",
-        };
-        return Err(lines.err(off, test, Some(key), format!("{x} {rule}")));
+    match broken(x, check) {
+        Some(rule) => Err(lines.err(off, test, Some(key), rule)),
+        None => Ok(x),
     }
-    Ok(x)
 }
 
 fn lookup<'t>(t: &'t RawTable, key: &str) -> Option<&'t Spanned<toml::Value>> {
@@ -789,7 +1058,7 @@ fn read_controller(lines: &Lines, c: &Spanned<RawTable>) -> Result<Controller, C
             off,
             None,
             key,
-            Check::Finite,
+            gain_check(key),
             "every TVC gain of spec section 2 must be given in [controller]",
         )
         .map_err(|e| rename_key(e, &format!("controller.{key}")))
@@ -852,8 +1121,8 @@ fn read_override(
                 format!("expected a number, found {}", type_name(val)),
             )
         })?;
-        if !x.is_finite() {
-            return Err(lines.err(off, Some(test), Some(&key), format!("{x} must be finite")));
+        if let Some(rule) = broken(x, gain_check(k)) {
+            return Err(lines.err(off, Some(test), Some(&key), rule));
         }
         let slot = match k.as_str() {
             "kp" => &mut o.kp,
@@ -877,6 +1146,28 @@ fn read_override(
         *slot = Some(x);
     }
     Ok(o)
+}
+
+/// A test's `file`, lexically (before any file system access): inside the campaign
+/// folder, not the folder itself, not campaign.toml.
+fn check_test_file(
+    lines: &Lines,
+    file: &str,
+    file_off: usize,
+    test: Option<&str>,
+) -> Result<(), CampaignError> {
+    let why = match normalise_relative(file) {
+        None => "is outside the campaign folder: a test file must be a path inside it, relative to campaign.toml (not opened)",
+        Some(p) if p.as_os_str().is_empty() => "names the campaign folder itself, not a file",
+        Some(p) if p == Path::new("campaign.toml") => "is campaign.toml itself, not a record",
+        Some(_) => return Ok(()),
+    };
+    Err(lines.err(
+        Some(file_off),
+        test,
+        Some("file"),
+        format!("`{file}` {why}"),
+    ))
 }
 
 fn read_test(
@@ -913,6 +1204,7 @@ fn read_test(
     if file.trim().is_empty() {
         return Err(lines.err(Some(file_off), tn, Some("file"), "file name is empty"));
     }
+    check_test_file(lines, file, file_off, tn)?;
     let (kind_s, kind_off) =
         required_string(lines, t, off, tn, "kind", "random | sine | triangle")?;
     let kind = match kind_s {
@@ -958,9 +1250,25 @@ fn read_test(
             .map(|v| number(lines, v, tn, key, check))
             .transpose()
     };
-    spec.rms = optional("rms", Check::Positive)?;
-    spec.frequency_hz = optional("frequency_hz", Check::Positive)?;
-    spec.amplitude_m = optional("amplitude_m", Check::Positive)?;
+    let level = match control {
+        Control::Displacement => DISPLACEMENT_M,
+        Control::Acceleration => ACCELERATION_M_S2,
+    };
+    spec.rms = optional("rms", Check::Within(level))?;
+    spec.frequency_hz = optional("frequency_hz", Check::Within(TEST_FREQUENCY_HZ))?;
+    spec.amplitude_m = optional("amplitude_m", Check::Within(DISPLACEMENT_M))?;
+    if let Some(f) = spec.frequency_hz.filter(|&f| f > sample_rate_hz / 2.0) {
+        let v = lookup(t, "frequency_hz").map(|v| v.span().start);
+        return Err(lines.err(
+            v,
+            tn,
+            Some("frequency_hz"),
+            format!(
+                "{f} Hz is above the Nyquist frequency {} Hz of sample_rate_hz",
+                sample_rate_hz / 2.0
+            ),
+        ));
+    }
     if let Some(v) = lookup(t, "band_hz") {
         let voff = Some(v.span().start);
         let bad = |m: String| lines.err(voff, tn, Some("band_hz"), m);
@@ -977,6 +1285,12 @@ fn read_test(
         let (lo, hi) = (nums[0], nums[1]);
         if !(lo.is_finite() && hi.is_finite() && lo >= 0.0 && hi > lo) {
             return Err(bad(format!("[{lo}, {hi}]: need 0 <= low < high")));
+        }
+        if lo > 0.0 && lo < TEST_FREQUENCY_HZ.min {
+            return Err(bad(format!(
+                "[{lo}, {hi}]: a low edge above 0 must be at least {} Hz (0 for a band from DC)",
+                TEST_FREQUENCY_HZ.min
+            )));
         }
         if hi > sample_rate_hz / 2.0 {
             return Err(bad(format!(
@@ -1043,6 +1357,9 @@ pub fn parse_campaign_toml(
     file: &str,
     default_name: &str,
 ) -> Result<(CampaignInfo, Vec<usize>), CampaignError> {
+    // classic Mac line ends (a lone CR) read as line ends; offsets are unchanged
+    let text = lone_cr_to_lf(text);
+    let text: &str = &text;
     let lines = Lines { text, file };
     let doc: RawDoc = toml::from_str(text).map_err(|e| {
         let msg = e.message().trim().to_string();
@@ -1068,7 +1385,13 @@ pub fn parse_campaign_toml(
         None => default_name.to_string(),
     };
     let sample_rate_hz = match &doc.sample_rate_hz {
-        Some(v) => number(&lines, v, None, "sample_rate_hz", Check::Positive)?,
+        Some(v) => number(
+            &lines,
+            v,
+            None,
+            "sample_rate_hz",
+            Check::Within(SAMPLE_RATE_HZ),
+        )?,
         None => {
             return Err(lines.err(
                 None,
@@ -1081,23 +1404,23 @@ pub fn parse_campaign_toml(
     let geometry = match &doc.geometry {
         Some(g) => {
             let off = g.span().start;
-            let get = |key: &str| {
+            let get = |key: &str, bound: Bound| {
                 required_number(
                     &lines,
                     g.get_ref(),
                     off,
                     None,
                     key,
-                    Check::Positive,
+                    Check::Within(bound),
                     "manufacturer geometry, spec section 4",
                 )
                 .map_err(|e| rename_key(e, &format!("geometry.{key}")))
             };
             Geometry {
-                piston_area_m2: get("piston_area_m2")?,
-                total_oil_volume_m3: get("total_oil_volume_m3")?,
-                supply_pressure_pa: get("supply_pressure_pa")?,
-                flow_gain_m3_s: get("flow_gain_m3_s")?,
+                piston_area_m2: get("piston_area_m2", PISTON_AREA_M2)?,
+                total_oil_volume_m3: get("total_oil_volume_m3", OIL_VOLUME_M3)?,
+                supply_pressure_pa: get("supply_pressure_pa", SUPPLY_PRESSURE_PA)?,
+                flow_gain_m3_s: get("flow_gain_m3_s", FLOW_GAIN_M3_S)?,
             }
         }
         None => {
@@ -1156,7 +1479,8 @@ pub fn parse_campaign_toml(
                 ),
             ));
         }
-        if let Some(j) = tests.iter().position(|t| t.file == spec.file) {
+        let same = |t: &TestSpec| normalise_relative(&t.file) == normalise_relative(&spec.file);
+        if let Some(j) = tests.iter().position(same) {
             return Err(lines.err(
                 Some(file_off),
                 Some(&spec.name),
@@ -1193,40 +1517,118 @@ fn dir_name(dir: &Path) -> String {
         .unwrap_or_else(|| "campaign".to_string())
 }
 
+/// The campaign folder with symlinks resolved (what "inside the folder" is measured against).
+fn campaign_root(dir: &Path) -> Result<PathBuf, CampaignError> {
+    dir.canonicalize().map_err(|source| CampaignError::Read {
+        file: display(dir),
+        source,
+    })
+}
+
+/// `dir/campaign.toml` as text: a regular file inside the folder, within its size bound.
+fn read_toml_text(root: &Path, dir: &Path) -> Result<(String, String), CampaignError> {
+    let path = dir.join("campaign.toml");
+    let file = display(&path);
+    if let Err(Some(real)) = resolve_inside(root, dir, "campaign.toml") {
+        return Err(CampaignError::Refused {
+            file,
+            message: format!(
+                "resolves to {}, outside the campaign folder {}; only files inside it are read",
+                real.display(),
+                root.display()
+            ),
+        });
+    }
+    Ok((read_text(&path, true)?, file))
+}
+
 /// Read and check `dir/campaign.toml` only (records are not opened).
 pub fn read_campaign_info(dir: &Path) -> Result<CampaignInfo, CampaignError> {
-    let path = dir.join("campaign.toml");
-    let text = read_text(&path)?;
-    Ok(parse_campaign_toml(&text, &display(&path), &dir_name(dir))?.0)
+    let root = campaign_root(dir)?;
+    let (text, file) = read_toml_text(&root, dir)?;
+    Ok(parse_campaign_toml(&text, &file, &dir_name(dir))?.0)
+}
+
+/// Where each test's file is, checked before any record is read: inside the campaign
+/// folder after resolving symlinks, a regular file within [`MAX_RECORD_BYTES`], and not
+/// the file of another test nor campaign.toml (same device and inode: symlinks and hard
+/// links included). Errors point at the test's `file` key.
+fn locate_test_files(
+    root: &Path,
+    dir: &Path,
+    info: &CampaignInfo,
+    file_lines: &[usize],
+    toml_file: &str,
+) -> Result<Vec<PathBuf>, CampaignError> {
+    use std::os::unix::fs::MetadataExt;
+    let identity = |m: &std::fs::Metadata| (m.dev(), m.ino());
+    let toml_id = std::fs::metadata(dir.join("campaign.toml"))
+        .ok()
+        .map(|m| identity(&m));
+    let mut seen: Vec<((u64, u64), usize)> = Vec::new();
+    let mut paths = Vec::with_capacity(info.tests.len());
+    for (i, (spec, &line)) in info.tests.iter().zip(file_lines).enumerate() {
+        let err = |message: String| CampaignError::Toml {
+            file: toml_file.to_string(),
+            line: Some(line),
+            test: Some(spec.name.clone()),
+            key: Some("file".to_string()),
+            message,
+        };
+        let path = dir.join(&spec.file);
+        let shown = display(&path);
+        let real = match resolve_inside(root, dir, &spec.file) {
+            Ok(real) => real,
+            Err(Some(real)) => {
+                return Err(err(format!(
+                    "`{}` resolves to {}, outside the campaign folder {}; a test file must be inside it (not opened)",
+                    spec.file,
+                    real.display(),
+                    root.display()
+                )))
+            }
+            Err(None) => path.clone(),
+        };
+        let meta =
+            std::fs::metadata(&real).map_err(|e| err(format!("cannot read {shown}: {e}")))?;
+        if !meta.file_type().is_file() || meta.len() > MAX_RECORD_BYTES {
+            let r = read_regular(&real, MAX_RECORD_BYTES, "largest plausible record");
+            let why = r.err().map_or_else(String::new, |r| r.to_string());
+            return Err(err(format!("{shown} {why}")));
+        }
+        let id = identity(&meta);
+        if Some(id) == toml_id {
+            return Err(err(format!(
+                "{shown} is campaign.toml itself, not a record"
+            )));
+        }
+        if let Some(&(_, j)) = seen.iter().find(|(s, _)| *s == id) {
+            return Err(err(format!(
+                "{shown} is the same file as `{}` of test `{}` (line {}): one file per test",
+                info.tests[j].file, info.tests[j].name, file_lines[j]
+            )));
+        }
+        seen.push((id, i));
+        paths.push(real);
+    }
+    Ok(paths)
 }
 
 /// Read a whole campaign: campaign.toml and every record it lists, in parallel.
 pub fn read_campaign(dir: &Path) -> Result<Campaign, CampaignError> {
-    let toml_path = dir.join("campaign.toml");
-    let toml_file = display(&toml_path);
-    let text = read_text(&toml_path)?;
+    let root = campaign_root(dir)?;
+    let (text, toml_file) = read_toml_text(&root, dir)?;
     let (info, file_lines) = parse_campaign_toml(&text, &toml_file, &dir_name(dir))?;
+    let real = locate_test_files(&root, dir, &info, &file_lines, &toml_file)?;
     let fs = info.sample_rate_hz;
-    let rate_source = format!("sample_rate_hz of {toml_file}");
     let results: Vec<Result<Record, CampaignError>> = info
         .tests
         .par_iter()
-        .zip(file_lines.par_iter())
-        .map(|(spec, &line)| {
-            let path = dir.join(&spec.file);
-            let csv = match std::fs::read_to_string(&path) {
-                Ok(t) => t,
-                Err(source) => {
-                    return Err(CampaignError::Toml {
-                        file: toml_file.clone(),
-                        line: Some(line),
-                        test: Some(spec.name.clone()),
-                        key: Some("file".to_string()),
-                        message: format!("cannot read {}: {source}", display(&path)),
-                    })
-                }
-            };
-            read_record_str(&csv, &display(&path), fs, &rate_source)
+        .zip(real.par_iter())
+        .map(|(spec, real)| {
+            let shown = display(&dir.join(&spec.file));
+            let csv = read_text(real, false).map_err(|e| rename_file(e, &shown))?;
+            read_record_str(&csv, &shown, fs, &toml_file)
         })
         .collect();
     let mut records = Vec::with_capacity(results.len());
@@ -1238,6 +1640,20 @@ pub fn read_campaign(dir: &Path) -> Result<Campaign, CampaignError> {
         info,
         records,
     })
+}
+
+/// The same error naming `file` (the path as campaign.toml gives it, not the resolved one).
+fn rename_file(e: CampaignError, file: &str) -> CampaignError {
+    let mut e = e;
+    match &mut e {
+        CampaignError::Read { file: f, .. }
+        | CampaignError::Write { file: f, .. }
+        | CampaignError::Csv { file: f, .. }
+        | CampaignError::Toml { file: f, .. }
+        | CampaignError::Refused { file: f, .. }
+        | CampaignError::Invalid { file: f, .. } => *f = file.to_string(),
+    }
+    e
 }
 
 fn toml_float(x: f64) -> String {
