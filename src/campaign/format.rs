@@ -1652,6 +1652,8 @@ fn rename_file(e: CampaignError, file: &str) -> CampaignError {
         | CampaignError::Toml { file: f, .. }
         | CampaignError::Refused { file: f, .. }
         | CampaignError::Invalid { file: f, .. } => *f = file.to_string(),
+        // an output error names the path it could not write; never renamed
+        CampaignError::Output(_) => {}
     }
     e
 }
