@@ -516,7 +516,7 @@ impl TimeGrid {
 
     /// The least-squares grid of the samples within `tol` of this grid (all if `None`).
     fn refit(&self, time: &[f64], tol: Option<f64>) -> TimeGrid {
-        let keep = |j: f64, t: f64| tol.map_or(true, |tol| (t - self.at(j)).abs() <= tol);
+        let keep = |j: f64, t: f64| tol.is_none_or(|tol| (t - self.at(j)).abs() <= tol);
         let (mut n, mut sj, mut st) = (0.0, 0.0, 0.0);
         for (j, &t) in self.indices(time).zip(time) {
             if keep(j, t) {
