@@ -432,3 +432,23 @@ fn jitter_and_gaps_are_still_non_uniform_time() {
     assert_eq!(e.line(), Some(1501), "{e}");
     assert!(e.to_string().contains("non-uniform time"), "{e}");
 }
+
+proptest::proptest! {
+    #![proptest_config(proptest::prelude::ProptestConfig::with_cases(48))]
+
+    /// Any constant clock offset: within 0.09 % it reads, beyond 0.11 % it is named a rate
+    /// mismatch (never "non-uniform time"), whatever the record length.
+    #[test]
+    fn a_constant_rate_offset_is_never_jitter(
+        offset in -0.004f64..0.004,
+        n in 20usize..6000,
+    ) {
+        let r = read_at(FS * (1.0 + offset), n);
+        if offset.abs() < 0.0009 {
+            proptest::prop_assert!(r.is_ok(), "{offset}: {:?}", r.err().map(|e| e.to_string()));
+        } else if offset.abs() > 0.0011 {
+            let e = r.unwrap_err().to_string();
+            proptest::prop_assert!(e.contains("sample rate disagrees"), "{offset}: {e}");
+        }
+    }
+}

@@ -519,7 +519,7 @@ impl TimeGrid {
 
     /// The least-squares grid of the samples within `tol` of this grid (all if `None`).
     fn refit(&self, time: &[f64], tol: Option<f64>) -> TimeGrid {
-        let keep = |j: f64, t: f64| tol.map_or(true, |tol| (t - self.at(j)).abs() <= tol);
+        let keep = |j: f64, t: f64| tol.is_none_or(|tol| (t - self.at(j)).abs() <= tol);
         let (mut n, mut sj, mut st) = (0.0, 0.0, 0.0);
         for (j, &t) in self.indices(time).zip(time) {
             if keep(j, t) {
@@ -920,41 +920,37 @@ const GAIN_LIMITS: [(&str, f64, &str); 6] = [
     ("kdp", 1e6, "1/N"),
 ];
 
-#[derive(Clone, Copy)]
-enum Check {
-    Within(Bound),
-}
-
-/// `x` broken by `check`: the rule it breaks.
-fn broken(x: f64, check: Check) -> Option<String> {
-    match check {
-        Check::Within(_) if !x.is_finite() => Some(format!("{x} must be finite")),
-        Check::Within(b) if b.min > 0.0 && x <= 0.0 => {
-            Some(format!("{} must be a finite number > 0", num(x)))
-        }
-        Check::Within(b) if !(x >= b.min && x <= b.max) => Some(format!(
+/// The rule `x` breaks against bound `b`, if any.
+fn broken(x: f64, b: Bound) -> Option<String> {
+    if !x.is_finite() {
+        Some(format!("{x} must be finite"))
+    } else if b.min > 0.0 && x <= 0.0 {
+        Some(format!("{} must be a finite number > 0", num(x)))
+    } else if !(b.min..=b.max).contains(&x) {
+        Some(format!(
             "{} {u} is outside the plausible range {} to {} {u}",
             num(x),
             num(b.min),
             num(b.max),
             u = b.unit
-        )),
-        _ => None,
+        ))
+    } else {
+        None
     }
 }
 
-/// The magnitude bound of gain `key`, as a check.
-fn gain_check(key: &str) -> Check {
+/// The magnitude bound of gain `key`.
+fn gain_check(key: &str) -> Bound {
     let (_, max, unit) = GAIN_LIMITS
         .iter()
         .find(|(k, _, _)| *k == key)
         .copied()
         .unwrap_or(("", f64::MAX, ""));
-    Check::Within(Bound {
+    Bound {
         min: -max,
         max,
         unit,
-    })
+    }
 }
 
 /// A number from a spanned value, checked.
@@ -963,7 +959,7 @@ fn number(
     v: &Spanned<toml::Value>,
     test: Option<&str>,
     key: &str,
-    check: Check,
+    check: Bound,
 ) -> Result<f64, CampaignError> {
     let off = Some(v.span().start);
     let x = as_number(v.get_ref()).ok_or_else(|| {
@@ -991,7 +987,7 @@ fn required_number(
     table_off: usize,
     test: Option<&str>,
     key: &str,
-    check: Check,
+    check: Bound,
     what: &str,
 ) -> Result<f64, CampaignError> {
     match lookup(t, key) {
@@ -1245,7 +1241,7 @@ fn read_test(
         amplitude_m: None,
         controller: ControllerOverride::default(),
     };
-    let optional = |key: &str, check: Check| -> Result<Option<f64>, CampaignError> {
+    let optional = |key: &str, check: Bound| -> Result<Option<f64>, CampaignError> {
         lookup(t, key)
             .map(|v| number(lines, v, tn, key, check))
             .transpose()
@@ -1254,9 +1250,9 @@ fn read_test(
         Control::Displacement => DISPLACEMENT_M,
         Control::Acceleration => ACCELERATION_M_S2,
     };
-    spec.rms = optional("rms", Check::Within(level))?;
-    spec.frequency_hz = optional("frequency_hz", Check::Within(TEST_FREQUENCY_HZ))?;
-    spec.amplitude_m = optional("amplitude_m", Check::Within(DISPLACEMENT_M))?;
+    spec.rms = optional("rms", level)?;
+    spec.frequency_hz = optional("frequency_hz", TEST_FREQUENCY_HZ)?;
+    spec.amplitude_m = optional("amplitude_m", DISPLACEMENT_M)?;
     if let Some(f) = spec.frequency_hz.filter(|&f| f > sample_rate_hz / 2.0) {
         let v = lookup(t, "frequency_hz").map(|v| v.span().start);
         return Err(lines.err(
@@ -1385,13 +1381,7 @@ pub fn parse_campaign_toml(
         None => default_name.to_string(),
     };
     let sample_rate_hz = match &doc.sample_rate_hz {
-        Some(v) => number(
-            &lines,
-            v,
-            None,
-            "sample_rate_hz",
-            Check::Within(SAMPLE_RATE_HZ),
-        )?,
+        Some(v) => number(&lines, v, None, "sample_rate_hz", SAMPLE_RATE_HZ)?,
         None => {
             return Err(lines.err(
                 None,
@@ -1411,7 +1401,7 @@ pub fn parse_campaign_toml(
                     off,
                     None,
                     key,
-                    Check::Within(bound),
+                    bound,
                     "manufacturer geometry, spec section 4",
                 )
                 .map_err(|e| rename_key(e, &format!("geometry.{key}")))
