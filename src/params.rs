@@ -629,12 +629,13 @@ pub enum Rule {
     },
 }
 
-/// Piston area: from a 4 mm bore (a bench-top shaker) to a 3.5 m bore. Beyond it the
-/// oil-column stiffness `4 beta A^2 / V_t` over- or underflows in parameter files.
+/// Piston area: 1 mm^2 (a 1.1 mm bore) to 10 m^2 (a 3.6 m bore); TREES Lab 0.0911 m^2,
+/// the largest tables' actuators about 0.2 m^2. Beyond it the oil-column stiffness
+/// `4 beta A^2 / V_t` over- or underflows in parameter files.
 pub const PISTON_AREA_M2: Rule = Rule::Range {
-    min: 1e-5,
+    min: 1e-6,
     max: 10.0,
-    why: "from a 4 mm bore to a 3.5 m bore",
+    why: "from a 1.1 mm bore to a 3.6 m bore",
 };
 /// Total oil volume: a few cm^3 (a small actuator) to 100 m^3 (far above any table).
 pub const OIL_VOLUME_M3: Rule = Rule::Range {

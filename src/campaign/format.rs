@@ -34,7 +34,7 @@ pub use super::files::{MAX_RECORD_BYTES, MAX_TOML_BYTES};
 use super::{
     Campaign, CampaignInfo, Control, ControllerOverride, Geometry, Record, TestKind, TestSpec,
 };
-use crate::params::Controller;
+use crate::params::{self, Controller, Rule};
 use rayon::prelude::*;
 use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};
@@ -855,32 +855,25 @@ struct Bound {
     unit: &'static str,
 }
 
-/// Piston area: 1 mm^2 to 10 m^2 (a 3.6 m bore). TREES Lab: 0.0911 m^2; the largest
-/// tables' actuators are around 0.2 m^2; a bench-top actuator is a few cm^2.
-const PISTON_AREA_M2: Bound = Bound {
-    min: 1e-6,
-    max: 10.0,
-    unit: "m^2",
-};
-/// Total oil volume: 1 mL to 100 m^3 (TREES Lab: 0.121 m^3).
-const OIL_VOLUME_M3: Bound = Bound {
-    min: 1e-6,
-    max: 100.0,
-    unit: "m^3",
-};
-/// Supply pressure: 1 bar to 1 GPa (industrial hydraulics run at 7 to 35 MPa).
-const SUPPLY_PRESSURE_PA: Bound = Bound {
-    min: 1e5,
-    max: 1e9,
-    unit: "Pa",
-};
-/// Valve flow gain (flow at full spool): 1 mL/s to 100 m^3/s (TREES Lab: 0.2 m^3/s, the
-/// largest tables a few m^3/s in total).
-const FLOW_GAIN_M3_S: Bound = Bound {
-    min: 1e-6,
-    max: 100.0,
-    unit: "m^3/s",
-};
+impl Bound {
+    /// The range of a parameter rule ([`crate::params`], one source for the parameter
+    /// file and campaign.toml); a rule without a range bounds nothing but the sign.
+    const fn of(rule: Rule, unit: &'static str) -> Bound {
+        match rule {
+            Rule::Range { min, max, .. } => Bound { min, max, unit },
+            _ => Bound {
+                min: f64::MIN_POSITIVE,
+                max: f64::MAX,
+                unit,
+            },
+        }
+    }
+}
+
+const PISTON_AREA_M2: Bound = Bound::of(params::PISTON_AREA_M2, "m^2");
+const OIL_VOLUME_M3: Bound = Bound::of(params::OIL_VOLUME_M3, "m^3");
+const SUPPLY_PRESSURE_PA: Bound = Bound::of(params::SUPPLY_PRESSURE_PA, "Pa");
+const FLOW_GAIN_M3_S: Bound = Bound::of(params::FLOW_GAIN_M3_S, "m^3/s");
 /// Sample rate: 1 Hz to 1 MHz (controllers sample at 0.5 to 10 kHz, fast DAQs 100 kHz).
 const SAMPLE_RATE_HZ: Bound = Bound {
     min: 1.0,
