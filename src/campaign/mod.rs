@@ -5,6 +5,7 @@
 //! program from any parameter set with seeded in-loop sensor noise.
 
 pub mod format;
+pub mod screen;
 pub mod synth;
 
 use crate::model::{Inputs, Reference};

@@ -31,11 +31,12 @@ pub use residuals::{
     NoiseFloor, Whitening, CHANNELS, SCORE_WINDOW,
 };
 
+use crate::campaign::screen::screen;
 use crate::campaign::{Campaign, TestKind};
 use crate::identify::frf::{Welch, WelchOptions};
 use crate::identify::lsq::{minimise, LsqOptions};
 use crate::identify::spool::refine_servovalve;
-use crate::identify::{identify, Identification};
+use crate::identify::{identify_screened, Identification};
 use crate::params::{ActuatorModel, Params, ServovalveModel};
 use num_complex::Complex64;
 use rayon::prelude::*;
@@ -376,6 +377,8 @@ pub struct Diagnosis {
     pub baseline_score: f64,
     pub candidates: Vec<Candidate>,
     pub cause: Option<Effect>,
+    /// Why the best candidate was not taken as the cause though it scored (unphysical).
+    pub cause_rejected: Option<String>,
     pub explained: bool,
     pub gain: f64,
     pub extended: Params,
@@ -571,14 +574,66 @@ fn foundation_start(c: &Campaign, table_mass_kg: f64) -> Option<Vec<f64>> {
 pub type Progress<'a> = &'a (dyn Fn(usize, usize, &str) + Sync);
 
 /// Diagnose a campaign (see the module doc).
-pub fn diagnose(c: &Campaign, progress: Option<Progress>) -> Diagnosis {
+/// Largest added (specimen, foundation) mass a cause may have, in table masses: beyond it
+/// the "effect" is a fit absorbing garbage, not a physical body on or under the table.
+pub const MAX_ADDED_MASS_RATIO: f64 = 100.0;
+
+/// Why the baseline identification cannot support a diagnosis, if it cannot: every part
+/// of the baseline must be identified, or the candidates would explain the defaults.
+fn baseline_gaps(id: &Identification) -> Option<String> {
+    let gaps: Vec<&str> = [
+        (id.servovalve.is_none(), "servovalve"),
+        (id.mass_kg.is_none(), "mass"),
+        (id.friction.is_none(), "Bouc-Wen friction"),
+        (id.oil_column.is_none(), "oil column"),
+    ]
+    .into_iter()
+    .filter_map(|(m, n)| m.then_some(n))
+    .collect();
+    (!gaps.is_empty()).then(|| {
+        format!(
+            "diagnosis refused: the baseline identification lacks the {} ({})",
+            gaps.join(", "),
+            id.missing.join("; ")
+        )
+    })
+}
+
+/// Why candidate `b` is not a physical cause, if it is not: a non-finite parameter, or an
+/// added mass or frequency outside physical bounds.
+fn unphysical(b: &Candidate, table_mass_kg: f64) -> Option<String> {
+    let f = crate::identify::FREQUENCY_BOUNDS_HZ;
+    b.parameters.iter().find_map(|(k, &v)| {
+        let bad = !v.is_finite()
+            || (k.ends_with("mass_kg") && !(v > 0.0 && v <= MAX_ADDED_MASS_RATIO * table_mass_kg))
+            || (k.ends_with("frequency_hz") && !(v >= f[0] && v <= f[1]));
+        bad.then(|| {
+            format!(
+                "{} rejected as a cause: {k} = {v:.4e} is not physical (bounds: finite, added mass <= {MAX_ADDED_MASS_RATIO} table masses, frequency in {f:?} Hz)",
+                b.effect.name()
+            )
+        })
+    })
+}
+
+/// Diagnose a campaign (see the module doc) after screening its records; refused (with
+/// the reason) when the baseline identification is incomplete.
+pub fn diagnose(c: &Campaign, progress: Option<Progress>) -> Result<Diagnosis, String> {
+    let screened = screen(c);
+    let id = identify_screened(&screened);
+    if let Some(why) = baseline_gaps(&id) {
+        return Err(why);
+    }
+    Ok(diagnose_with(&screened.campaign, id, progress))
+}
+
+fn diagnose_with(c: &Campaign, id: Identification, progress: Option<Progress>) -> Diagnosis {
     let tick = |i: usize, what: &str| {
         if let Some(p) = progress {
             p(i, 9, what);
         }
     };
     tick(0, "identifying the baseline");
-    let id = identify(c);
     let noise = estimate_noise(c);
     let mut base = id.params;
     // the valve by output error on the spool channel (fitting halves)
@@ -760,8 +815,13 @@ pub fn diagnose(c: &Campaign, progress: Option<Progress>) -> Diagnosis {
         .iter()
         .min_by(|a, b| a.score.total_cmp(&b.score))
         .cloned();
+    let rejected = best
+        .as_ref()
+        .and_then(|b| unphysical(b, base.table.mass_kg));
     let (cause, extended, ext_resid) = match &best {
-        Some(b) if any_missed && baseline_score / b.score >= REQUIRED_GAIN => {
+        Some(b)
+            if any_missed && baseline_score / b.score >= REQUIRED_GAIN && rejected.is_none() =>
+        {
             (Some(b.effect), b.params, b.heldout_residual)
         }
         _ => (None, base, baseline_heldout),
@@ -777,6 +837,7 @@ pub fn diagnose(c: &Campaign, progress: Option<Progress>) -> Diagnosis {
         baseline_score,
         candidates,
         cause,
+        cause_rejected: rejected,
         explained,
         gain,
         extended,
@@ -1296,6 +1357,7 @@ impl Diagnosis {
         }
         json!({
             "cause": cause,
+            "cause_rejected": self.cause_rejected,
             "parameters": parameters,
             "gain": self.gain,
             "explained": self.explained,
