@@ -651,7 +651,7 @@ pub fn fit_friction(
     let (data, short) = sine_data(c, &slow);
     if data.is_empty() {
         return Err(format!(
-            "no usable slow sine test (S1, S2, S4, S5, S7, S8): Bouc-Wen friction not identified{}",
+            "no slow sine test (S1, S2, S4, S5, S7, S8) usable: Bouc-Wen friction not identified{}",
             short.iter().map(|s| format!("; {s}")).collect::<String>()
         ));
     }
@@ -726,7 +726,7 @@ pub fn fit_mass_periodic(
     let (data, short) = sine_data(c, &["S3", "S6", "S9"]);
     if data.is_empty() {
         return Err(format!(
-            "no usable fast sine test (S3, S6, S9): mass not identified by the loop approach{}",
+            "no fast sine test (S3, S6, S9) usable: mass not identified by the loop approach{}",
             short.iter().map(|s| format!("; {s}")).collect::<String>()
         ));
     }
