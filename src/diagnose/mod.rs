@@ -1388,3 +1388,36 @@ impl Diagnosis {
         })
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn candidate(mass_kg: f64, frequency_hz: f64) -> Candidate {
+        Candidate {
+            effect: Effect::Foundation,
+            parameters: [
+                ("mass_kg".to_string(), mass_kg),
+                ("frequency_hz".to_string(), frequency_hz),
+                ("damping_ratio".to_string(), 0.05),
+            ]
+            .into_iter()
+            .collect(),
+            heldout_residual: 1.0,
+            score: 1.0,
+            fit_residual: 1.0,
+            params: Params::default(),
+            heldout_rows: Vec::new(),
+            score_rows: Vec::new(),
+        }
+    }
+
+    /// Issue 14 item 7: a 100 000 t foundation under a 41 t table is not a cause.
+    #[test]
+    fn an_unphysical_cause_is_rejected() {
+        assert!(unphysical(&candidate(1e8, 10.0), 41_258.0).is_some());
+        assert!(unphysical(&candidate(f64::NAN, 10.0), 41_258.0).is_some());
+        assert!(unphysical(&candidate(5e5, 1e6), 41_258.0).is_some());
+        assert!(unphysical(&candidate(5e5, 10.0), 41_258.0).is_none());
+    }
+}
