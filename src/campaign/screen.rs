@@ -205,7 +205,7 @@ fn screen_channel(name: &str, x: &mut [f64], max_repaired: usize, out: &mut Vec<
         .fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), &v| {
             (a.min(v), b.max(v))
         });
-    if !(hi > lo) {
+    if hi.is_nan() || hi <= lo {
         out.push(finding(
             name,
             Action::TestExcluded,
@@ -231,7 +231,7 @@ fn spikes(x: &[f64]) -> Vec<usize> {
     let med = median(&mut fin);
     let mut dev: Vec<f64> = fin.iter().map(|v| (v - med).abs()).collect();
     let sigma = 1.4826 * median(&mut dev);
-    if !(sigma > 0.0) {
+    if sigma.is_nan() || sigma <= 0.0 {
         return Vec::new();
     }
     let lim = SPIKE_ROBUST_SIGMAS * sigma;

@@ -542,7 +542,7 @@ pub fn fit_triangles(c: &Campaign, mass_kg: f64) -> Result<TriangleFit, String> 
     if names.is_empty() {
         return Err("no triangle test (T1-T6): stiffness and sliding friction not identified from triangles".into());
     }
-    if !(cycles >= MIN_TRIANGLE_CYCLES) || rows.len() < 10 {
+    if cycles.is_nan() || cycles < MIN_TRIANGLE_CYCLES || rows.len() < 10 {
         return Err(format!(
             "the triangle tests ({}) hold {cycles:.2} steady cycles and {} samples away from reversals; at least {MIN_TRIANGLE_CYCLES} cycle and 10 samples needed: stiffness and sliding friction not identified",
             names.join(", "),
