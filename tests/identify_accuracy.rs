@@ -55,7 +55,7 @@ fn check(label: &str, p: &Params, seed: u64) {
         }
     }
     let m = p.table.mass_kg;
-    expect("mass (final)", rel(id.mass_kg, m), 0.02);
+    expect("mass (final)", rel(id.mass_kg.unwrap_or(f64::NAN), m), 0.02);
     expect(
         "mass random",
         rel(id.mass_random.as_ref().unwrap().mass_kg, m),

@@ -31,11 +31,12 @@ pub use residuals::{
     NoiseFloor, Whitening, CHANNELS, SCORE_WINDOW,
 };
 
+use crate::campaign::screen::screen;
 use crate::campaign::{Campaign, TestKind};
 use crate::identify::frf::{Welch, WelchOptions};
 use crate::identify::lsq::{minimise, LsqOptions};
 use crate::identify::spool::refine_servovalve;
-use crate::identify::{identify, Identification};
+use crate::identify::{identify_screened, Identification};
 use crate::params::{ActuatorModel, Params, ServovalveModel};
 use num_complex::Complex64;
 use rayon::prelude::*;
@@ -376,6 +377,8 @@ pub struct Diagnosis {
     pub baseline_score: f64,
     pub candidates: Vec<Candidate>,
     pub cause: Option<Effect>,
+    /// Why the best candidate was not taken as the cause though it scored (unphysical).
+    pub cause_rejected: Option<String>,
     pub explained: bool,
     pub gain: f64,
     pub extended: Params,
@@ -571,14 +574,66 @@ fn foundation_start(c: &Campaign, table_mass_kg: f64) -> Option<Vec<f64>> {
 pub type Progress<'a> = &'a (dyn Fn(usize, usize, &str) + Sync);
 
 /// Diagnose a campaign (see the module doc).
-pub fn diagnose(c: &Campaign, progress: Option<Progress>) -> Diagnosis {
+/// Largest added (specimen, foundation) mass a cause may have, in table masses: beyond it
+/// the "effect" is a fit absorbing garbage, not a physical body on or under the table.
+pub const MAX_ADDED_MASS_RATIO: f64 = 100.0;
+
+/// Why the baseline identification cannot support a diagnosis, if it cannot: every part
+/// of the baseline must be identified, or the candidates would explain the defaults.
+fn baseline_gaps(id: &Identification) -> Option<String> {
+    let gaps: Vec<&str> = [
+        (id.servovalve.is_none(), "servovalve"),
+        (id.mass_kg.is_none(), "mass"),
+        (id.friction.is_none(), "Bouc-Wen friction"),
+        (id.oil_column.is_none(), "oil column"),
+    ]
+    .into_iter()
+    .filter_map(|(m, n)| m.then_some(n))
+    .collect();
+    (!gaps.is_empty()).then(|| {
+        format!(
+            "diagnosis refused: the baseline identification lacks the {} ({})",
+            gaps.join(", "),
+            id.missing.join("; ")
+        )
+    })
+}
+
+/// Why candidate `b` is not a physical cause, if it is not: a non-finite parameter, or an
+/// added mass or frequency outside physical bounds.
+fn unphysical(b: &Candidate, table_mass_kg: f64) -> Option<String> {
+    let f = crate::identify::FREQUENCY_BOUNDS_HZ;
+    b.parameters.iter().find_map(|(k, &v)| {
+        let bad = !v.is_finite()
+            || (k.ends_with("mass_kg") && !(v > 0.0 && v <= MAX_ADDED_MASS_RATIO * table_mass_kg))
+            || (k.ends_with("frequency_hz") && !(v >= f[0] && v <= f[1]));
+        bad.then(|| {
+            format!(
+                "{} rejected as a cause: {k} = {v:.4e} is not physical (bounds: finite, added mass <= {MAX_ADDED_MASS_RATIO} table masses, frequency in {f:?} Hz)",
+                b.effect.name()
+            )
+        })
+    })
+}
+
+/// Diagnose a campaign (see the module doc) after screening its records; refused (with
+/// the reason) when the baseline identification is incomplete.
+pub fn diagnose(c: &Campaign, progress: Option<Progress>) -> Result<Diagnosis, String> {
+    let screened = screen(c);
+    let id = identify_screened(&screened);
+    if let Some(why) = baseline_gaps(&id) {
+        return Err(why);
+    }
+    Ok(diagnose_with(&screened.campaign, id, progress))
+}
+
+fn diagnose_with(c: &Campaign, id: Identification, progress: Option<Progress>) -> Diagnosis {
     let tick = |i: usize, what: &str| {
         if let Some(p) = progress {
             p(i, 9, what);
         }
     };
     tick(0, "identifying the baseline");
-    let id = identify(c);
     let noise = estimate_noise(c);
     let mut base = id.params;
     // the valve by output error on the spool channel (fitting halves)
@@ -760,8 +815,13 @@ pub fn diagnose(c: &Campaign, progress: Option<Progress>) -> Diagnosis {
         .iter()
         .min_by(|a, b| a.score.total_cmp(&b.score))
         .cloned();
+    let rejected = best
+        .as_ref()
+        .and_then(|b| unphysical(b, base.table.mass_kg));
     let (cause, extended, ext_resid) = match &best {
-        Some(b) if any_missed && baseline_score / b.score >= REQUIRED_GAIN => {
+        Some(b)
+            if any_missed && baseline_score / b.score >= REQUIRED_GAIN && rejected.is_none() =>
+        {
             (Some(b.effect), b.params, b.heldout_residual)
         }
         _ => (None, base, baseline_heldout),
@@ -777,6 +837,7 @@ pub fn diagnose(c: &Campaign, progress: Option<Progress>) -> Diagnosis {
         baseline_score,
         candidates,
         cause,
+        cause_rejected: rejected,
         explained,
         gain,
         extended,
@@ -1296,6 +1357,7 @@ impl Diagnosis {
         }
         json!({
             "cause": cause,
+            "cause_rejected": self.cause_rejected,
             "parameters": parameters,
             "gain": self.gain,
             "explained": self.explained,
@@ -1324,5 +1386,38 @@ impl Diagnosis {
             },
             "rule": format!("held-out = second half of every test; every model is simulated noise-free and with seeded sensor noise at the estimated levels inside the loop; residual (measured - noise-free run) and predicted spread (noisy run with its own sensor noise - noise-free run) are split into octave bands (the lowest from 0 Hz, the highest to Nyquist) and scored per band in windows of {SCORE_WINDOW} samples or more (8 degrees of freedom in the band): score = sqrt(mean over bands of mean(P_meas/P_pred + ln(P_pred/floor^2 share))) (Gaussian log score, a proper scoring rule), residual = sqrt(mean over bands of mean(P_meas/P_pred)) (1 for a model that predicts the data to within its noise); missed cells = held-out (test, channel) cells whose baseline residual exceeds {MISS_RATIO}; cause = the candidate with the lowest RMS score on the missed cells (1 % penalty per parameter) when it divides the baseline's score by >= {REQUIRED_GAIN}; none when no cell is missed; gain = baseline residual / extended residual on the missed cells; explained when the extended residual <= {EXPLAINED_RATIO}"),
         })
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn candidate(mass_kg: f64, frequency_hz: f64) -> Candidate {
+        Candidate {
+            effect: Effect::Foundation,
+            parameters: [
+                ("mass_kg".to_string(), mass_kg),
+                ("frequency_hz".to_string(), frequency_hz),
+                ("damping_ratio".to_string(), 0.05),
+            ]
+            .into_iter()
+            .collect(),
+            heldout_residual: 1.0,
+            score: 1.0,
+            fit_residual: 1.0,
+            params: Params::default(),
+            heldout_rows: Vec::new(),
+            score_rows: Vec::new(),
+        }
+    }
+
+    /// Issue 14 item 7: a 100 000 t foundation under a 41 t table is not a cause.
+    #[test]
+    fn an_unphysical_cause_is_rejected() {
+        assert!(unphysical(&candidate(1e8, 10.0), 41_258.0).is_some());
+        assert!(unphysical(&candidate(f64::NAN, 10.0), 41_258.0).is_some());
+        assert!(unphysical(&candidate(5e5, 1e6), 41_258.0).is_some());
+        assert!(unphysical(&candidate(5e5, 10.0), 41_258.0).is_none());
     }
 }

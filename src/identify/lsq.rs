@@ -58,6 +58,9 @@ where
     F: Fn(&[f64]) -> Option<Vec<f64>> + Sync,
 {
     let n = theta0.len();
+    if !problem_is_sound(theta0, lower, upper, scale) {
+        return None;
+    }
     let clamp = |t: &mut Vec<f64>| {
         for i in 0..n {
             t[i] = t[i].clamp(lower[i], upper[i]);
@@ -145,6 +148,39 @@ where
     Some(finish(theta, c, m, &jm, iterations))
 }
 
+/// Whether the start, bounds and scales make a problem [`minimise`] can run: every value
+/// finite, matching lengths, `lower <= upper` and positive scales (data-derived starts or
+/// bounds may be NaN; `f64::clamp` panics on such bounds).
+fn problem_is_sound(theta0: &[f64], lower: &[f64], upper: &[f64], scale: &[f64]) -> bool {
+    let n = theta0.len();
+    n > 0
+        && [lower.len(), upper.len(), scale.len()]
+            .iter()
+            .all(|&l| l == n)
+        && (0..n).all(|i| {
+            theta0[i].is_finite()
+                && lower[i].is_finite()
+                && upper[i].is_finite()
+                && lower[i] <= upper[i]
+                && scale[i].is_finite()
+                && scale[i] > 0.0
+        })
+}
+
+impl LsqFit {
+    /// Whether the fit moved from `theta0` (relative change above `1e-9` of the scale in
+    /// some parameter): a fit that did not move reports its start, not an estimate.
+    pub fn moved_from(&self, theta0: &[f64], scale: &[f64]) -> bool {
+        self.iterations > 0
+            && self
+                .theta
+                .iter()
+                .zip(theta0)
+                .zip(scale)
+                .any(|((t, t0), s)| (t - t0).abs() > 1e-9 * t0.abs().max(*s))
+    }
+}
+
 fn finish(theta: Vec<f64>, cost: f64, m: usize, jm: &DMatrix<f64>, iterations: usize) -> LsqFit {
     let n = theta.len();
     let dof = (m as f64 - n as f64).max(1.0);
@@ -165,8 +201,14 @@ fn finish(theta: Vec<f64>, cost: f64, m: usize, jm: &DMatrix<f64>, iterations: u
 
 /// Linear least squares `min |A x - b|` (SVD), with the one-sigma parameter uncertainty.
 pub fn linear(a: &DMatrix<f64>, b: &DVector<f64>) -> Option<(DVector<f64>, Vec<f64>)> {
+    if a.nrows() < a.ncols() || a.iter().chain(b.iter()).any(|v| !v.is_finite()) {
+        return None;
+    }
     let svd = a.clone().svd(true, true);
     let x = svd.solve(b, 1e-12).ok()?;
+    if x.iter().any(|v| !v.is_finite()) {
+        return None;
+    }
     let r = a * &x - b;
     let dof = (a.nrows() as f64 - a.ncols() as f64).max(1.0);
     let s2 = r.norm_squared() / dof;

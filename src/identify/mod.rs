@@ -12,6 +12,7 @@ pub mod frf;
 pub mod lsq;
 pub mod spool;
 
+use crate::campaign::screen::{screen, Action, Finding, Screening};
 use crate::campaign::{Campaign, Record, TestSpec};
 use crate::linear::{Linearisation, OilColumn, TfFigures};
 use crate::params::{ActuatorModel, Params, ServovalveModel};
@@ -36,6 +37,63 @@ pub const OIL_BAND_HZ: [f64; 2] = [4.0, 40.0];
 pub const VALIDATION_BAND_HZ: [f64; 2] = [1.0, 40.0];
 /// Triangles: samples with |u| below this fraction of the amplitude (eq. 4.9).
 pub const TRIANGLE_FRACTION: f64 = 0.8;
+/// Shortest random record for a spectral estimate (R1, R2, R3), seconds: eight 50 %
+/// overlapped Welch segments of 2 s (0.5 Hz resolution, coarser cannot place the valve
+/// and oil-column corners; fewer averages leave an FRF variance above 1/8).
+pub const MIN_RANDOM_S: f64 = 9.0;
+/// Fewest steady cycles of a sine (between its first and last full-amplitude peaks) for
+/// the loop approach and the Bouc-Wen fit: pairing `t` with `T/2 - t` needs one whole
+/// cycle, and the hysteresis loop is only closed over one.
+pub const MIN_SINE_CYCLES: f64 = 1.0;
+/// Fewest steady cycles over all triangle tests (both directions of sliding needed).
+pub const MIN_TRIANGLE_CYCLES: f64 = 1.0;
+/// Physical bounds of a table's moving mass, kg: from a bench table to the largest
+/// tables with payload (about 2000 t).
+pub const MASS_BOUNDS_KG: [f64; 2] = [1.0, 2e6];
+/// Physical bounds of the servovalve's and oil column's natural frequencies, Hz.
+pub const FREQUENCY_BOUNDS_HZ: [f64; 2] = [0.1, 2000.0];
+/// Physical bounds of a damping ratio.
+pub const DAMPING_BOUNDS: [f64; 2] = [0.0, 10.0];
+
+/// `Err` naming `what` of test `name` unless `x` is finite and within `bounds`.
+fn check_bounds(name: &str, what: &str, x: f64, bounds: [f64; 2]) -> Result<(), String> {
+    if x.is_finite() && x >= bounds[0] && x <= bounds[1] {
+        Ok(())
+    } else {
+        Err(format!(
+            "{name}: {what} = {x:.4e} is outside its physical bounds {bounds:?}: not identified"
+        ))
+    }
+}
+
+/// `Err` naming test `name` unless the record lasts `MIN_RANDOM_S`.
+fn check_random_length(name: &str, rec: &Record, fs: f64, what: &str) -> Result<(), String> {
+    let secs = rec.len() as f64 / fs;
+    if secs >= MIN_RANDOM_S {
+        Ok(())
+    } else {
+        Err(format!(
+            "{name}: {secs:.2} s of data, the {what} needs at least {MIN_RANDOM_S} s (frequency resolution and averages): not identified"
+        ))
+    }
+}
+
+/// `Err` when a nonlinear fit did not move from its start (it would report the start).
+fn check_moved(
+    name: &str,
+    what: &str,
+    fit: &lsq::LsqFit,
+    t0: &[f64],
+    scale: &[f64],
+) -> Result<(), String> {
+    if fit.moved_from(t0, scale) {
+        Ok(())
+    } else {
+        Err(format!(
+            "{name}: the {what} did not move from its start values (no information in the data): not identified"
+        ))
+    }
+}
 
 /// A sampled FRF kept for the report's figures.
 #[derive(Debug, Clone, Default, Serialize)]
@@ -194,13 +252,16 @@ pub struct Identification {
     pub mass_periodic: Option<PeriodicMassFit>,
     pub oil_column: Option<OilColumnFit>,
     pub validation: Option<Validation>,
-    /// The final mass: inverse-variance mean of the random and periodic estimates.
-    pub mass_kg: f64,
+    /// The final mass: inverse-variance mean of the random and periodic estimates, `None`
+    /// when neither exists (the parameter file then keeps the default, marked as such).
+    pub mass_kg: Option<f64>,
     /// The identified model, usable by `simulate` and the FMU.
     #[serde(skip)]
     pub params: Params,
     /// What could not be identified, and why.
     pub missing: Vec<String>,
+    /// What the screening of the records found and did.
+    pub screening: Vec<Finding>,
     pub welch: WelchOptions,
 }
 
@@ -233,6 +294,7 @@ pub fn fit_servovalve(name: &str, rec: &Record, fs: f64) -> Result<ServovalveFit
     let x = spool(rec).ok_or_else(|| {
         format!("{name} has no spool_position channel: servovalve not identified")
     })?;
+    check_random_length(name, rec, fs, "servovalve fit")?;
     let w = welch_for(fs, rec.len()).map_err(|e| format!("{name}: {e}"))?;
     let e = w
         .frf(&rec.valve_command, x)
@@ -258,17 +320,20 @@ pub fn fit_servovalve(name: &str, rec: &Record, fs: f64) -> Result<ServovalveFit
     };
     let opts = LsqOptions::default();
     // eq. 4.1: Ks / (1 + s tau)
+    let (t1, s1) = ([1.0, 0.01], [1.0, 0.01]);
     let first = minimise(
         |p| Some(resid(&|s| p[0] / (1.0 + s * p[1]))),
-        &[1.0, 0.01],
+        &t1,
         &[0.05, 1e-4],
         &[20.0, 1.0],
-        &[1.0, 0.01],
+        &s1,
         opts,
     )
     .ok_or_else(|| format!("{name}: first-order valve fit failed"))?;
+    check_moved(name, "first-order valve fit", &first, &t1, &s1)?;
     // eq. 4.2: Ks w^2 / (s^2 + 2 xi w s + w^2), from the first-order guess
     let w0 = 1.0 / first.theta[1];
+    let t2 = [first.theta[0], 1.5 * w0 / (2.0 * PI), 1.0];
     let second = minimise(
         |p| {
             let wn = 2.0 * PI * p[1];
@@ -276,13 +341,20 @@ pub fn fit_servovalve(name: &str, rec: &Record, fs: f64) -> Result<ServovalveFit
                 p[0] * wn * wn / (s * s + 2.0 * p[2] * wn * s + wn * wn)
             }))
         },
-        &[first.theta[0], 1.5 * w0 / (2.0 * PI), 1.0],
+        &t2,
         &[0.05, 0.5, 0.05],
         &[20.0, 500.0, 5.0],
         &[1.0, 10.0, 1.0],
         opts,
     )
     .ok_or_else(|| format!("{name}: second-order valve fit failed"))?;
+    check_moved(
+        name,
+        "second-order valve fit",
+        &second,
+        &t2,
+        &[1.0, 10.0, 1.0],
+    )?;
     let err_of = |model: &dyn Fn(Complex64) -> Complex64| {
         let m: Vec<Complex64> = f
             .iter()
@@ -292,6 +364,13 @@ pub fn fit_servovalve(name: &str, rec: &Record, fs: f64) -> Result<ServovalveFit
     };
     let (k1, tau) = (first.theta[0], first.theta[1]);
     let (k2, fv, xi) = (second.theta[0], second.theta[1], second.theta[2]);
+    check_bounds(
+        name,
+        "servovalve natural frequency (Hz)",
+        fv,
+        FREQUENCY_BOUNDS_HZ,
+    )?;
+    check_bounds(name, "servovalve damping ratio", xi, DAMPING_BOUNDS)?;
     let wn = 2.0 * PI * fv;
     let first_err = err_of(&|s| k1 / (1.0 + s * tau));
     let second_err = err_of(&|s| k2 * wn * wn / (s * s + 2.0 * xi * wn * s + wn * wn));
@@ -350,6 +429,7 @@ pub fn fit_mass_corrected(
     fs: f64,
     friction: Option<(&FrictionFit, f64)>,
 ) -> Result<MassFit, String> {
+    check_random_length(name, rec, fs, "apparent-mass fit")?;
     let w = welch_for(fs, rec.len()).map_err(|e| format!("{name}: {e}"))?;
     let force: Vec<f64> = match friction {
         Some((fr, k)) => {
@@ -379,6 +459,7 @@ pub fn fit_mass_corrected(
         b[2 * r + 1] = e.h1[i].im;
     }
     let (x, sigma) = lsq::linear(&a, &b).ok_or_else(|| format!("{name}: mass fit failed"))?;
+    check_bounds(name, "mass (kg)", x[0], MASS_BOUNDS_KG)?;
     let low = e.band(1.0, 5.0);
     let plain = low.iter().map(|&i| e.h1[i].re).sum::<f64>() / low.len().max(1) as f64;
     Ok(MassFit {
@@ -438,12 +519,15 @@ fn derivative(x: &[f64], fs: f64) -> Vec<f64> {
 pub fn fit_triangles(c: &Campaign, mass_kg: f64) -> Result<TriangleFit, String> {
     let fs = c.info.sample_rate_hz;
     let (mut rows, mut rhs, mut names) = (Vec::new(), Vec::new(), Vec::new());
+    let mut cycles = 0.0;
     for (spec, rec) in c.info.tests.iter().zip(&c.records) {
         if spec.kind != crate::campaign::TestKind::Triangle {
             continue;
         }
         names.push(spec.name.clone());
         let range = steady_range(spec, rec);
+        cycles +=
+            range.len() as f64 / fs * spec.frequency_hz.filter(|f| f.is_finite()).unwrap_or(0.0);
         let amp = spec.amplitude_m.unwrap_or(1.0);
         let xs = smooth(&rec.displacement_m, 8);
         let v = derivative(&xs, fs);
@@ -458,12 +542,19 @@ pub fn fit_triangles(c: &Campaign, mass_kg: f64) -> Result<TriangleFit, String> 
     if names.is_empty() {
         return Err("no triangle test (T1-T6): stiffness and sliding friction not identified from triangles".into());
     }
-    if rows.len() < 10 {
-        return Err("the triangle tests hold too few samples away from reversals".into());
+    if cycles.is_nan() || cycles < MIN_TRIANGLE_CYCLES || rows.len() < 10 {
+        return Err(format!(
+            "the triangle tests ({}) hold {cycles:.2} steady cycles and {} samples away from reversals; at least {MIN_TRIANGLE_CYCLES} cycle and 10 samples needed: stiffness and sliding friction not identified",
+            names.join(", "),
+            rows.len()
+        ));
     }
     let a = DMatrix::from_fn(rows.len(), 2, |i, j| rows[i][j]);
     let b = DVector::from_vec(rhs.clone());
     let (x, sigma) = lsq::linear(&a, &b).ok_or("triangle fit failed")?;
+    let who = names.join(", ");
+    check_bounds(&who, "stiffness (N/m)", x[0], [-1e12, 1e12])?;
+    check_bounds(&who, "sliding friction (N)", x[1], [-1e9, 1e9])?;
     let step = (rows.len() / 1500).max(1);
     Ok(TriangleFit {
         tests: names,
@@ -510,12 +601,28 @@ struct SineData {
     f: Vec<f64>,
 }
 
-fn sine_data(c: &Campaign, names: &[&str]) -> Vec<SineData> {
+/// The sine tests `names` of `c` with at least [`MIN_SINE_CYCLES`] steady cycles; the
+/// others are named in the second list with the reason.
+fn sine_data(c: &Campaign, names: &[&str]) -> (Vec<SineData>, Vec<String>) {
     let fs = c.info.sample_rate_hz;
-    names
+    let mut short = Vec::new();
+    let data = names
         .iter()
         .filter_map(|n| c.test(n))
         .filter(|(s, _)| s.kind == crate::campaign::TestKind::Sine)
+        .filter(|(spec, rec)| {
+            let r = steady_range(spec, rec);
+            let f = spec.frequency_hz.filter(|f| f.is_finite()).unwrap_or(0.0);
+            let cycles = r.len() as f64 / fs * f;
+            let ok = cycles >= MIN_SINE_CYCLES;
+            if !ok {
+                short.push(format!(
+                    "{} ({}): {cycles:.2} steady cycles, at least {MIN_SINE_CYCLES} needed: not used",
+                    spec.name, spec.file
+                ));
+            }
+            ok
+        })
         .map(|(spec, rec)| {
             let r = steady_range(spec, rec);
             let xs = smooth(&rec.displacement_m, 8);
@@ -528,7 +635,8 @@ fn sine_data(c: &Campaign, names: &[&str]) -> Vec<SineData> {
                 f: rec.force_n[r].to_vec(),
             }
         })
-        .collect()
+        .collect();
+    (data, short)
 }
 
 /// Bouc-Wen parameters (eqs. 4.14-4.15) fitted to `F_D = F_A - M a - k x` (eq. 4.13)
@@ -540,11 +648,12 @@ pub fn fit_friction(
     f_mu0: f64,
 ) -> Result<FrictionFit, String> {
     let slow = ["S1", "S2", "S4", "S5", "S7", "S8"];
-    let data = sine_data(c, &slow);
+    let (data, short) = sine_data(c, &slow);
     if data.is_empty() {
-        return Err(
-            "no slow sine test (S1, S2, S4, S5, S7, S8): Bouc-Wen friction not identified".into(),
-        );
+        return Err(format!(
+            "no slow sine test (S1, S2, S4, S5, S7, S8) usable: Bouc-Wen friction not identified{}",
+            short.iter().map(|s| format!("; {s}")).collect::<String>()
+        ));
     }
     let fd: Vec<Vec<f64>> = data
         .iter()
@@ -572,15 +681,22 @@ pub fn fit_friction(
     } else {
         1000.0
     };
+    let (t0, scale) = ([f0, 1e-3, 0.5], [f0, 1e-3, 0.5]);
     let fit = minimise(
         residual,
-        &[f0, 1e-3, 0.5],
+        &t0,
         &[0.0, 1e-5, 0.0],
         &[1e7, 0.05, 0.999],
-        &[f0, 1e-3, 0.5],
+        &scale,
         LsqOptions::default(),
     )
     .ok_or("Bouc-Wen fit failed")?;
+    let who = data
+        .iter()
+        .map(|d| d.name.as_str())
+        .collect::<Vec<_>>()
+        .join(", ");
+    check_moved(&who, "Bouc-Wen fit", &fit, &t0, &scale)?;
     let (fmu, y, b) = (fit.theta[0], fit.theta[1], fit.theta[2]);
     let d0 = &data[0];
     let z = bouc_wen_path(&d0.x, y, b, d0.v[0].signum());
@@ -607,11 +723,12 @@ pub fn fit_mass_periodic(
     stiffness: f64,
     friction: Option<&FrictionFit>,
 ) -> Result<PeriodicMassFit, String> {
-    let data = sine_data(c, &["S3", "S6", "S9"]);
+    let (data, short) = sine_data(c, &["S3", "S6", "S9"]);
     if data.is_empty() {
-        return Err(
-            "no fast sine test (S3, S6, S9): mass not identified by the loop approach".into(),
-        );
+        return Err(format!(
+            "no fast sine test (S3, S6, S9) usable: mass not identified by the loop approach{}",
+            short.iter().map(|s| format!("; {s}")).collect::<String>()
+        ));
     }
     let mut per = Vec::new();
     let mut sig = Vec::new();
@@ -629,7 +746,14 @@ pub fn fit_mass_periodic(
             d.a.len(),
             (0..d.a.len()).map(|i| d.f[i] - fd[i] - stiffness * d.x[i]),
         );
-        let (x, s) = lsq::linear(&a, &b).ok_or("loop-approach fit failed")?;
+        let (x, s) =
+            lsq::linear(&a, &b).ok_or_else(|| format!("{}: loop-approach fit failed", d.name))?;
+        check_bounds(
+            &d.name,
+            "mass by the loop approach (kg)",
+            x[0],
+            MASS_BOUNDS_KG,
+        )?;
         per.push(x[0]);
         sig.push(s[0]);
     }
@@ -683,6 +807,13 @@ pub fn fit_oil_column(
     let x = spool(rec).ok_or_else(|| {
         format!("{name} has no spool_position channel: oil column not identified")
     })?;
+    check_random_length(name, rec, fs, "oil-column fit")?;
+    check_bounds(
+        name,
+        "mass used by the oil-column fit (kg)",
+        mass_kg,
+        MASS_BOUNDS_KG,
+    )?;
     let w = welch_for(fs, rec.len()).map_err(|e| format!("{name}: {e}"))?;
     let iv = w
         .frf_instrumental(&rec.valve_command, x, &rec.force_n)
@@ -716,17 +847,21 @@ pub fn fit_oil_column(
             }
             Some(r)
         };
+        let (t0, scale) = ([k0, l0, 1.0], [k0, l0, 1.0]);
         minimise(
             resid,
-            &[k0, l0, 1.0],
+            &t0,
             &[k0 * 0.05, 0.0, 0.1],
             &[k0 * 20.0, 1e-7, 10.0],
-            &[k0, l0, 1.0],
+            &scale,
             LsqOptions::default(),
         )
+        .filter(|f| f.moved_from(&t0, &scale))
         .map(|f| (f, idx))
     };
-    let (fit, _) = fit_on(&iv.h1, &iv).ok_or_else(|| format!("{name}: oil-column fit failed"))?;
+    let (fit, _) = fit_on(&iv.h1, &iv).ok_or_else(|| {
+        format!("{name}: oil-column fit failed or did not move from its start values")
+    })?;
     // H1 from the noisy spool, for the report's comparison
     let plain = w.frf(x, &rec.force_n).map_err(|e| format!("{name}: {e}"))?;
     let h1fit = fit_on(&plain.h1, &plain).map(|(f, _)| f);
@@ -737,6 +872,14 @@ pub fn fit_oil_column(
         (f, zeta, beta)
     };
     let (f_oil, zeta, beta) = figures(fit.theta[0], fit.theta[1]);
+    check_bounds(
+        name,
+        "oil-column frequency (Hz)",
+        f_oil,
+        FREQUENCY_BOUNDS_HZ,
+    )?;
+    check_bounds(name, "oil-column damping ratio", zeta, DAMPING_BOUNDS)?;
+    check_bounds(name, "bulk modulus (Pa)", beta, [1e6, 1e11])?;
     let (h1f, h1z) = h1fit
         .map(|f| {
             let (a, b, _) = figures(f.theta[0], f.theta[1]);
@@ -801,9 +944,10 @@ pub fn validate(c: &Campaign, name: &str, params: &Params) -> Result<Validation,
         .frf(&rec.ref_acceleration_m_s2, &acc)
         .map_err(|e| e.to_string())?;
     let nonlinear: Vec<Complex64> = idx.iter().map(|&i| simf.h1[i]).collect();
+    // the peak search runs over the validation band only (issue 14, item 9)
     let measured_figures = TfFigures::from_frf(&crate::linear::Frf {
-        frequency_hz: meas.frequency_hz.clone(),
-        response: meas.h1.clone(),
+        frequency_hz: f.clone(),
+        response: h.clone(),
     });
     let model_figures = lin.table_tf_figures();
     let ones = vec![1.0; f.len()];
@@ -825,8 +969,39 @@ pub fn validate(c: &Campaign, name: &str, params: &Params) -> Result<Validation,
     })
 }
 
-/// Identify everything the campaign allows (paper section 4), in dependency order.
+/// Identify everything the campaign allows (paper section 4), in dependency order, after
+/// screening every record ([`crate::campaign::screen`]).
 pub fn identify(c: &Campaign) -> Identification {
+    identify_screened(&screen(c))
+}
+
+/// Why test `name` is not available: absent, or excluded by the screening.
+fn absent(s: &Screening, name: &str, what: &str) -> String {
+    let why: Vec<String> = s
+        .findings
+        .iter()
+        .filter(|f| f.test == name && f.action == Action::TestExcluded)
+        .map(|f| f.to_string())
+        .collect();
+    if why.is_empty() {
+        format!("no {name} test: {what}")
+    } else {
+        format!("{name} excluded by screening ({}): {what}", why.join("; "))
+    }
+}
+
+/// `r` with the file of test `name` appended to its error.
+fn in_file<T>(c: &Campaign, name: &str, r: Result<T, String>) -> Result<T, String> {
+    let file = c
+        .test(name)
+        .map(|(s, _)| s.file.clone())
+        .unwrap_or_default();
+    r.map_err(|e| format!("{e} [file {file}]"))
+}
+
+/// [`identify`] on an already screened campaign.
+pub fn identify_screened(s: &Screening) -> Identification {
+    let c = &s.campaign;
     let fs = c.info.sample_rate_hz;
     let g = &c.info.geometry;
     let mut missing = Vec::new();
@@ -835,7 +1010,8 @@ pub fn identify(c: &Campaign) -> Identification {
             missing.push(e);
         }
     };
-    // start from the defaults with the lab's geometry and controller
+    // start from the defaults with the lab's geometry and controller; `defaults` lists
+    // what stays a default and why
     let mut p = Params::trees_lab();
     p.actuator.piston_area_m2 = g.piston_area_m2;
     p.actuator.total_oil_volume_m3 = g.total_oil_volume_m3;
@@ -844,8 +1020,8 @@ pub fn identify(c: &Campaign) -> Identification {
     p.controller = c.info.controller;
 
     let valve = match c.test("R1") {
-        Some((_, r)) => fit_servovalve("R1", r, fs),
-        None => Err("no R1 test: servovalve not identified (defaults kept)".into()),
+        Some((_, r)) => in_file(c, "R1", fit_servovalve("R1", r, fs)),
+        None => Err(absent(s, "R1", "servovalve not identified (defaults kept)")),
     };
     let valve = valve.map_err(|e| note(Err(e))).ok();
     if let Some(v) = &valve {
@@ -856,21 +1032,24 @@ pub fn identify(c: &Campaign) -> Identification {
         p.servovalve.damping_ratio = v.damping_ratio;
     }
     let mass_random = match c.test("R2") {
-        Some((_, r)) => fit_mass("R2", r, fs),
-        None => Err("no R2 test: mass not identified from random data".into()),
+        Some((_, r)) => in_file(c, "R2", fit_mass("R2", r, fs)),
+        None => Err(absent(s, "R2", "mass not identified from random data")),
     };
     let mass_random = mass_random.map_err(|e| note(Err(e))).ok();
-    let m0 = mass_random
-        .as_ref()
-        .map(|m| m.mass_kg)
-        .unwrap_or(p.table.mass_kg);
-    let triangles = fit_triangles(c, m0).map_err(|e| note(Err(e))).ok();
+    let m0 = mass_random.as_ref().map(|m| m.mass_kg);
+    let triangles = fit_triangles(c, m0.unwrap_or(p.table.mass_kg))
+        .map_err(|e| note(Err(e)))
+        .ok();
     let k = triangles.as_ref().map(|t| t.stiffness_n_m).unwrap_or(0.0);
     let f_mu0 = triangles
         .as_ref()
         .map(|t| t.sliding_friction_n)
         .unwrap_or(p.friction.force_n);
-    let friction = fit_friction(c, m0, k, f_mu0).map_err(|e| note(Err(e))).ok();
+    let friction = match m0 {
+        Some(m0) => fit_friction(c, m0, k, f_mu0),
+        None => Err("Bouc-Wen friction not identified: it needs the mass from R2".into()),
+    };
+    let friction = friction.map_err(|e| note(Err(e))).ok();
     let mass_periodic = fit_mass_periodic(c, k, friction.as_ref())
         .map_err(|e| note(Err(e)))
         .ok();
@@ -881,38 +1060,24 @@ pub fn identify(c: &Campaign) -> Identification {
             .or(mass_random),
         _ => mass_random,
     };
-    // final mass: inverse-variance mean
-    let mut num = 0.0;
-    let mut den = 0.0;
-    for (m, s) in [
-        mass_random.as_ref().map(|m| (m.mass_kg, m.sigma_mass_kg)),
-        mass_periodic.as_ref().map(|m| (m.mass_kg, m.sigma_mass_kg)),
-    ]
-    .into_iter()
-    .flatten()
-    {
-        let w = 1.0 / s.max(1e-3 * m.abs()).powi(2);
-        num += w * m;
-        den += w;
+    let mass_kg = final_mass(mass_random.as_ref(), mass_periodic.as_ref());
+    if mass_kg.is_none() {
+        note(Err(
+            "no mass estimate: table.mass_kg is not identified (the parameter file keeps the default)"
+                .into(),
+        ));
     }
-    let mass_kg = if den > 0.0 {
-        num / den
-    } else {
-        p.table.mass_kg
-    };
-    if den == 0.0 {
-        note(Err("no mass estimate: the default mass is kept".into()));
-    }
-    p.table.mass_kg = mass_kg;
+    p.table.mass_kg = mass_kg.unwrap_or(p.table.mass_kg);
     p.table.stiffness_n_m = k.max(0.0);
     if let Some(fr) = &friction {
         p.friction.force_n = fr.force_n;
         p.friction.yield_displacement_m = fr.yield_displacement_m;
         p.friction.shape = fr.shape.min(0.999);
     }
-    let oil = match c.test("R3") {
-        Some((_, r)) => fit_oil_column("R3", r, fs, g, mass_kg),
-        None => Err("no R3 test: oil column not identified".into()),
+    let oil = match (c.test("R3"), mass_kg) {
+        (Some((_, r)), Some(m)) => in_file(c, "R3", fit_oil_column("R3", r, fs, g, m)),
+        (Some(_), None) => Err("oil column not identified: it needs the identified mass".into()),
+        (None, _) => Err(absent(s, "R3", "oil column not identified")),
     };
     let oil = oil.map_err(|e| note(Err(e))).ok();
     if let Some(o) = &oil {
@@ -920,9 +1085,12 @@ pub fn identify(c: &Campaign) -> Identification {
         p.actuator.leakage_m3_s_pa = o.leakage_m3_s_pa;
     }
     let validation_test = if c.test("R2").is_some() { "R2" } else { "R3" };
-    let validation = validate(c, validation_test, &p)
-        .map_err(|e| note(Err(e)))
-        .ok();
+    let validation = if c.test(validation_test).is_some() {
+        in_file(c, validation_test, validate(c, validation_test, &p))
+    } else {
+        Err("no R2 or R3 test usable: validation skipped".into())
+    };
+    let validation = validation.map_err(|e| note(Err(e))).ok();
     if let Some(v) = &validation {
         if v.table_tf_error_nonlinear < v.table_tf_error {
             p.actuator.model = ActuatorModel::Nonlinear;
@@ -941,8 +1109,29 @@ pub fn identify(c: &Campaign) -> Identification {
         mass_kg,
         params: p,
         missing,
+        screening: s.findings.clone(),
         welch,
     }
+}
+
+/// The final mass: inverse-variance mean of the random and periodic estimates, `None`
+/// when neither exists.
+fn final_mass(random: Option<&MassFit>, periodic: Option<&PeriodicMassFit>) -> Option<f64> {
+    let mut num = 0.0;
+    let mut den = 0.0;
+    for (m, s) in [
+        random.map(|m| (m.mass_kg, m.sigma_mass_kg)),
+        periodic.map(|m| (m.mass_kg, m.sigma_mass_kg)),
+    ]
+    .into_iter()
+    .flatten()
+    {
+        let s = if s.is_finite() { s } else { m.abs() };
+        let w = 1.0 / s.max(1e-3 * m.abs()).powi(2);
+        num += w * m;
+        den += w;
+    }
+    Some(num / den).filter(|m| den > 0.0 && m.is_finite())
 }
 
 impl Identification {
@@ -965,7 +1154,7 @@ impl Identification {
                 "model": v.map(|v| v.chosen.name()).unwrap_or("unidentified"),
             },
             "table": {
-                "mass_kg": num(self.mass_kg),
+                "mass_kg": num(self.mass_kg.unwrap_or(nan)),
                 "mass_random_kg": num(self.mass_random.as_ref().map(|m| m.mass_kg).unwrap_or(nan)),
                 "mass_periodic_kg": num(self.mass_periodic.as_ref().map(|m| m.mass_kg).unwrap_or(nan)),
                 "stiffness_n_m": num(self.triangles.as_ref().map(|t| t.stiffness_n_m).unwrap_or(nan)),
@@ -987,8 +1176,10 @@ impl Identification {
                 "measured_peak_hz": num(val.and_then(|v| v.measured_figures).map(|f| f.peak_hz).unwrap_or(nan)),
                 "test": val.map(|v| v.test.clone()),
             },
-            "actuator": { "model": p.actuator.model.name(), "leakage_m3_s_pa": num(p.actuator.leakage_m3_s_pa) },
+            "actuator": { "model": p.actuator.model.name(), "leakage_m3_s_pa": num(o.map(|o| o.leakage_m3_s_pa).unwrap_or(nan)) },
             "missing": self.missing,
+            "screening": self.screening,
+            "defaults": self.defaults().into_iter().map(|(k, r)| json!({"key": k, "reason": r})).collect::<Vec<_>>(),
         });
         let mut unc = Map::new();
         let mut put = |block: &str, key: &str, x: Option<f64>| {
@@ -1045,6 +1236,51 @@ impl Identification {
         put("friction", "force_n", fr.map(|f| f.sigma_force_n));
         out["uncertainty"] = Value::Object(unc);
         out
+    }
+
+    /// The parameter-file keys that hold a default, not an identified value, and why.
+    pub fn defaults(&self) -> Vec<(&'static str, &'static str)> {
+        let mut d = Vec::new();
+        let mut add = |missing: bool, keys: &[&'static str], why: &'static str| {
+            if missing {
+                d.extend(keys.iter().map(|k| (*k, why)));
+            }
+        };
+        add(
+            self.servovalve.is_none(),
+            &[
+                "servovalve.gain",
+                "servovalve.time_constant_s",
+                "servovalve.natural_frequency_hz",
+                "servovalve.damping_ratio",
+            ],
+            "servovalve not identified (see missing)",
+        );
+        add(
+            self.mass_kg.is_none(),
+            &["table.mass_kg"],
+            "no mass estimate (see missing)",
+        );
+        add(
+            self.triangles.is_none(),
+            &["table.stiffness_n_m"],
+            "no triangle estimate: zero stiffness assumed",
+        );
+        add(
+            self.friction.is_none(),
+            &[
+                "friction.force_n",
+                "friction.yield_displacement_m",
+                "friction.shape",
+            ],
+            "Bouc-Wen friction not identified (see missing)",
+        );
+        add(
+            self.oil_column.is_none(),
+            &["actuator.bulk_modulus_pa", "actuator.leakage_m3_s_pa"],
+            "oil column not identified (see missing)",
+        );
+        d
     }
 
     /// Oil-column figures of the identified parameters.

@@ -23,6 +23,9 @@ impl Row {
     /// Relative error against the truth, percent (absolute value when the truth is 0).
     pub fn error(&self) -> Option<f64> {
         let t = self.truth?;
+        if !self.value.is_finite() {
+            return None;
+        }
         Some(if t == 0.0 {
             self.value
         } else {

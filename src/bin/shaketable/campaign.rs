@@ -236,6 +236,13 @@ fn run_check(a: CheckArgs) -> anyhow::Result<()> {
         "{} tests, {total} s of table time: every rule of the format holds",
         c.records.len()
     );
+    let findings = shaketable::campaign::screen::screen(&c).findings;
+    if findings.is_empty() {
+        println!("screening: no finding (finite, no spikes, no flat channel, signs consistent)");
+    }
+    for f in &findings {
+        println!("screening: {f}");
+    }
     let mut p = shaketable::Params::trees_lab();
     c.info.geometry.apply_to(&mut p);
     p.controller = c.info.controller;

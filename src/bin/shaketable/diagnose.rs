@@ -63,6 +63,13 @@ pub fn run(args: Args) -> anyhow::Result<()> {
     if let Some(b) = &bar {
         b.finish_and_clear();
     }
+    let d = d.map_err(|e| anyhow::anyhow!("{}: {e}", args.campaign.display()))?;
+    for f in &d.identification.screening {
+        println!("screening: {f}");
+    }
+    if let Some(r) = &d.cause_rejected {
+        println!("note: {r}");
+    }
     println!(
         "diagnosis of {} ({:.1} s)",
         args.campaign.display(),

@@ -64,8 +64,14 @@ pub fn run(args: Args) -> anyhow::Result<()> {
         "{}",
         shaketable::report::identify::text_table(&rows, truth.is_some())
     );
+    for f in &id.screening {
+        println!("screening: {f}");
+    }
     for m in &id.missing {
         println!("not identified: {m}");
+    }
+    for (k, why) in id.defaults() {
+        println!("default kept in the parameter file: {k} ({why})");
     }
     outputs.write(
         &(serde_json::to_string_pretty(&id.to_json())? + "\n"),

@@ -1,0 +1,389 @@
+//! Screening of every record before estimation (issue 14, item 7): non-finite samples,
+//! isolated spikes, flat (silent) channels, sign conventions that contradict physics and a
+//! declared `kind` that contradicts the reference. Isolated bad samples are repaired by
+//! linear interpolation with a note; anything worse excludes the test from estimation
+//! with the reason. Estimators then see only the screened campaign.
+
+use super::{Campaign, Record, TestKind, TestSpec};
+use serde::Serialize;
+use std::f64::consts::PI;
+
+/// A sample is a spike when it lies this many robust standard deviations (1.4826 MAD)
+/// from the record's median *and* from the median of its 7 neighbours. A Gaussian
+/// signal never reaches 20 sigma, a sine at most 1.5; the neighbour test keeps genuine
+/// short events (the triangles' reversal pulses last tens of samples at 512 Hz, limited
+/// by the valve and oil-column dynamics) from being mistaken for glitches.
+pub const SPIKE_ROBUST_SIGMAS: f64 = 20.0;
+/// Half width of the neighbour median of the spike test (7 samples: a glitch of up to
+/// 3 samples is still an outlier of its own window).
+const SPIKE_WINDOW_HALF: usize = 3;
+/// At most this fraction of a record's samples may be repaired (non-finite or spikes);
+/// more is not a glitch but a bad recording, and the test is excluded.
+pub const MAX_REPAIRED_FRACTION: f64 = 1e-3;
+/// A record shorter than this is not screened or used (no estimator can use it).
+pub const MIN_RECORD_SAMPLES: usize = 64;
+/// A sign convention contradicts physics when the correlation that must be positive is
+/// below minus this: a flipped channel gives about -0.9, an honest one noise-level
+/// values near 0 at worst, so the margin leaves no doubt.
+pub const SIGN_CORRELATION_MIN: f64 = 0.3;
+/// A `sine` test's reference must be explained to this fraction of its variance by a
+/// sine at the declared frequency (the ramps cost a few percent).
+pub const SINE_EXPLAINED_MIN: f64 = 0.8;
+
+/// What screening did about a finding.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize)]
+#[serde(rename_all = "snake_case")]
+pub enum Action {
+    /// The bad samples were replaced by linear interpolation.
+    Repaired,
+    /// The test is not used for estimation.
+    TestExcluded,
+}
+
+/// One finding of the screening, for a test and channel.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct Finding {
+    pub test: String,
+    pub file: String,
+    pub channel: String,
+    pub action: Action,
+    pub message: String,
+}
+
+impl std::fmt::Display for Finding {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        let what = match self.action {
+            Action::Repaired => "repaired",
+            Action::TestExcluded => "test excluded from estimation",
+        };
+        write!(
+            f,
+            "{} ({}), {}: {} ({what})",
+            self.test, self.file, self.channel, self.message
+        )
+    }
+}
+
+/// The screened campaign (excluded tests removed, repaired samples replaced) and what
+/// was found.
+#[derive(Debug, Clone)]
+pub struct Screening {
+    pub campaign: Campaign,
+    pub findings: Vec<Finding>,
+}
+
+/// Screen every record of `c`.
+pub fn screen(c: &Campaign) -> Screening {
+    let mut out = c.clone();
+    out.info.tests.clear();
+    out.records.clear();
+    let mut findings = Vec::new();
+    for (spec, rec) in c.info.tests.iter().zip(&c.records) {
+        let mut rec = rec.clone();
+        let before = findings.len();
+        let ok = screen_record(spec, &mut rec, c.info.sample_rate_hz, &mut findings);
+        for f in &mut findings[before..] {
+            f.test = spec.name.clone();
+            f.file = spec.file.clone();
+        }
+        if ok {
+            out.info.tests.push(spec.clone());
+            out.records.push(rec);
+        }
+    }
+    Screening {
+        campaign: out,
+        findings,
+    }
+}
+
+fn finding(channel: &str, action: Action, message: String) -> Finding {
+    Finding {
+        test: String::new(),
+        file: String::new(),
+        channel: channel.to_string(),
+        action,
+        message,
+    }
+}
+
+/// The named channels of a record, mutable, with their names.
+fn channels_mut(r: &mut Record) -> Vec<(&'static str, &mut Vec<f64>)> {
+    let mut v: Vec<(&'static str, &mut Vec<f64>)> = vec![
+        ("ref_displacement_m", &mut r.ref_displacement_m),
+        ("ref_velocity_m_s", &mut r.ref_velocity_m_s),
+        ("ref_acceleration_m_s2", &mut r.ref_acceleration_m_s2),
+        ("valve_command", &mut r.valve_command),
+        ("displacement_m", &mut r.displacement_m),
+        ("acceleration_m_s2", &mut r.acceleration_m_s2),
+        ("force_n", &mut r.force_n),
+    ];
+    if let Some(x) = r.spool_position.as_mut() {
+        v.push(("spool_position", x));
+    }
+    v
+}
+
+/// Screen one record in place; false when the test must be excluded.
+fn screen_record(spec: &TestSpec, r: &mut Record, fs: f64, out: &mut Vec<Finding>) -> bool {
+    let n = r.len();
+    if n < MIN_RECORD_SAMPLES {
+        out.push(finding(
+            "all",
+            Action::TestExcluded,
+            format!("{n} samples, fewer than the {MIN_RECORD_SAMPLES} any estimate needs"),
+        ));
+        return false;
+    }
+    let max_repaired = ((n as f64 * MAX_REPAIRED_FRACTION) as usize).max(1);
+    let mut ok = true;
+    for (name, x) in channels_mut(r) {
+        if x.len() != n {
+            out.push(finding(
+                name,
+                Action::TestExcluded,
+                "length differs from time_s".into(),
+            ));
+            ok = false;
+            continue;
+        }
+        ok &= screen_channel(name, x, max_repaired, out);
+    }
+    if !ok {
+        return false;
+    }
+    ok &= check_signs(spec, r, fs, out);
+    ok &= check_kind(spec, r, fs, out);
+    ok
+}
+
+/// Non-finite samples, spikes and flat channels of one channel; false to exclude.
+fn screen_channel(name: &str, x: &mut [f64], max_repaired: usize, out: &mut Vec<Finding>) -> bool {
+    let bad_nf: Vec<usize> = (0..x.len()).filter(|&i| !x[i].is_finite()).collect();
+    if bad_nf.len() > max_repaired {
+        let msg = format!(
+            "{} non-finite samples (first at row {})",
+            bad_nf.len(),
+            bad_nf[0] + 1
+        );
+        out.push(finding(name, Action::TestExcluded, msg));
+        return false;
+    }
+    let spikes = spikes(x);
+    let mut bad: Vec<usize> = bad_nf.iter().chain(&spikes).copied().collect();
+    bad.sort_unstable();
+    bad.dedup();
+    if bad.len() > max_repaired {
+        let msg = format!(
+            "{} samples beyond {SPIKE_ROBUST_SIGMAS} robust sigmas (first at row {}): not isolated glitches",
+            bad.len(),
+            bad[0] + 1
+        );
+        out.push(finding(name, Action::TestExcluded, msg));
+        return false;
+    }
+    if !bad.is_empty() {
+        if !interpolate(x, &bad) {
+            out.push(finding(
+                name,
+                Action::TestExcluded,
+                "no good sample to repair from".into(),
+            ));
+            return false;
+        }
+        let rows: Vec<String> = bad.iter().map(|i| (i + 1).to_string()).collect();
+        let msg = format!(
+            "{} non-finite and {} spike samples at rows {} replaced by interpolation",
+            bad_nf.len(),
+            spikes.len(),
+            rows.join(", ")
+        );
+        out.push(finding(name, Action::Repaired, msg));
+    }
+    let (lo, hi) = x
+        .iter()
+        .fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), &v| {
+            (a.min(v), b.max(v))
+        });
+    if hi.is_nan() || hi <= lo {
+        out.push(finding(
+            name,
+            Action::TestExcluded,
+            format!("flat channel (every sample {lo})"),
+        ));
+        return false;
+    }
+    true
+}
+
+/// Median of finite values (NaN when none).
+fn median(v: &mut [f64]) -> f64 {
+    if v.is_empty() {
+        return f64::NAN;
+    }
+    v.sort_unstable_by(|a, b| a.total_cmp(b));
+    v[v.len() / 2]
+}
+
+/// Indices of finite samples that are outliers of both the record and their neighbours.
+fn spikes(x: &[f64]) -> Vec<usize> {
+    let mut fin: Vec<f64> = x.iter().copied().filter(|v| v.is_finite()).collect();
+    let med = median(&mut fin);
+    let mut dev: Vec<f64> = fin.iter().map(|v| (v - med).abs()).collect();
+    let sigma = 1.4826 * median(&mut dev);
+    if sigma.is_nan() || sigma <= 0.0 {
+        return Vec::new();
+    }
+    let lim = SPIKE_ROBUST_SIGMAS * sigma;
+    (0..x.len())
+        .filter(|&i| x[i].is_finite() && (x[i] - med).abs() > lim)
+        .filter(|&i| {
+            let lo = i.saturating_sub(SPIKE_WINDOW_HALF);
+            let hi = (i + SPIKE_WINDOW_HALF + 1).min(x.len());
+            let mut w: Vec<f64> = x[lo..hi]
+                .iter()
+                .copied()
+                .filter(|v| v.is_finite())
+                .collect();
+            (x[i] - median(&mut w)).abs() > lim
+        })
+        .collect()
+}
+
+/// Replace `bad` (sorted) by linear interpolation between the nearest good samples.
+fn interpolate(x: &mut [f64], bad: &[usize]) -> bool {
+    let is_bad = |i: usize| bad.binary_search(&i).is_ok();
+    let good: Vec<usize> = (0..x.len()).filter(|&i| !is_bad(i)).collect();
+    if good.is_empty() {
+        return false;
+    }
+    for &i in bad {
+        let k = good.partition_point(|&g| g < i);
+        x[i] = match (k.checked_sub(1).map(|j| good[j]), good.get(k)) {
+            (Some(a), Some(&b)) => x[a] + (x[b] - x[a]) * (i - a) as f64 / (b - a) as f64,
+            (Some(a), None) => x[a],
+            (None, Some(&b)) => x[b],
+            (None, None) => return false,
+        };
+    }
+    true
+}
+
+/// Correlation coefficient (NaN when a side has no variance).
+fn correlation(a: &[f64], b: &[f64]) -> f64 {
+    let n = a.len().min(b.len()) as f64;
+    let ma = a.iter().sum::<f64>() / n;
+    let mb = b.iter().sum::<f64>() / n;
+    let (mut sab, mut saa, mut sbb) = (0.0, 0.0, 0.0);
+    for (x, y) in a.iter().zip(b) {
+        sab += (x - ma) * (y - mb);
+        saa += (x - ma) * (x - ma);
+        sbb += (y - mb) * (y - mb);
+    }
+    sab / (saa * sbb).sqrt()
+}
+
+/// Second derivative by central differences of a centred moving average.
+fn second_derivative(x: &[f64], fs: f64) -> Vec<f64> {
+    let h = 4usize;
+    let n = x.len();
+    let s: Vec<f64> = (0..n)
+        .map(|i| {
+            let (lo, hi) = (i.saturating_sub(h), (i + h + 1).min(n));
+            x[lo..hi].iter().sum::<f64>() / (hi - lo) as f64
+        })
+        .collect();
+    (0..n)
+        .map(|i| {
+            if i == 0 || i + 1 >= n {
+                0.0
+            } else {
+                (s[i + 1] - 2.0 * s[i] + s[i - 1]) * fs * fs
+            }
+        })
+        .collect()
+}
+
+/// Sign conventions: force with acceleration in a random test (the inertia dominates),
+/// acceleration with the second derivative of displacement in every test.
+fn check_signs(spec: &TestSpec, r: &Record, fs: f64, out: &mut Vec<Finding>) -> bool {
+    let mut ok = true;
+    let d2x = second_derivative(&r.displacement_m, fs);
+    let rho = correlation(&r.acceleration_m_s2, &d2x);
+    if rho < -SIGN_CORRELATION_MIN {
+        let msg = format!(
+            "correlation with the second derivative of displacement_m is {rho:.2}: opposite sign convention"
+        );
+        out.push(finding("acceleration_m_s2", Action::TestExcluded, msg));
+        ok = false;
+    }
+    if spec.kind == TestKind::Random {
+        let rho = correlation(&r.force_n, &r.acceleration_m_s2);
+        if rho < -SIGN_CORRELATION_MIN {
+            let msg = format!(
+                "correlation with acceleration_m_s2 is {rho:.2} in a random test (mass times acceleration must be positive): opposite sign convention"
+            );
+            out.push(finding("force_n", Action::TestExcluded, msg));
+            ok = false;
+        }
+    }
+    ok
+}
+
+/// A declared `sine` test whose reference is not a sine at `frequency_hz`.
+fn check_kind(spec: &TestSpec, r: &Record, fs: f64, out: &mut Vec<Finding>) -> bool {
+    if spec.kind != TestKind::Sine {
+        return true;
+    }
+    let Some(f) = spec.frequency_hz.filter(|f| f.is_finite() && *f > 0.0) else {
+        return true;
+    };
+    let x = &r.ref_displacement_m;
+    let n = x.len() as f64;
+    let mean = x.iter().sum::<f64>() / n;
+    let (mut s, mut c, mut ss, mut cc, mut sc, mut var) = (0.0, 0.0, 0.0, 0.0, 0.0, 0.0);
+    for (k, v) in x.iter().enumerate() {
+        let ph = 2.0 * PI * f * k as f64 / fs;
+        let (a, b) = (ph.sin(), ph.cos());
+        let y = v - mean;
+        s += y * a;
+        c += y * b;
+        ss += a * a;
+        cc += b * b;
+        sc += a * b;
+        var += y * y;
+    }
+    // least squares on [sin, cos]: explained variance
+    let det = ss * cc - sc * sc;
+    let explained = if det > 0.0 && var > 0.0 {
+        let (p, q) = ((cc * s - sc * c) / det, (ss * c - sc * s) / det);
+        (p * s + q * c) / var
+    } else {
+        0.0
+    };
+    if explained < SINE_EXPLAINED_MIN {
+        let msg = format!(
+            "declared a sine at {f} Hz but such a sine explains {:.0} % of the reference (at least {:.0} % needed)",
+            100.0 * explained.max(0.0),
+            100.0 * SINE_EXPLAINED_MIN
+        );
+        out.push(finding("ref_displacement_m", Action::TestExcluded, msg));
+        return false;
+    }
+    true
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn isolated_spike_is_found_and_repaired() {
+        let mut x: Vec<f64> = (0..1000).map(|k| (k as f64 * 0.05).sin()).collect();
+        x[500] = 1e300;
+        let s = spikes(&x);
+        assert_eq!(s, vec![500]);
+        assert!(interpolate(&mut x, &s));
+        assert!((x[500] - (25.0f64).sin()).abs() < 0.01);
+    }
+}

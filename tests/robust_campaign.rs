@@ -1,0 +1,256 @@
+//! Property test of issue 14: a valid small campaign (the project's synthesiser, seeded)
+//! mutated at random (cells, rows, signs, scales, spikes, truncation, campaign.toml keys,
+//! a missing file). For reading, screening, `identify` and `diagnose`: no panic, bounded
+//! time, and either an error naming a file or estimates that are finite and physical or
+//! absent with a reason.
+
+use proptest::prelude::*;
+use shaketable::campaign::format::{read_campaign, write_campaign};
+use shaketable::campaign::screen::screen;
+use shaketable::campaign::synth::{synthesise, SynthOptions};
+use shaketable::campaign::{Campaign, Record, TestKind};
+use shaketable::identify::{identify, Identification, MASS_BOUNDS_KG};
+use shaketable::Params;
+use std::sync::OnceLock;
+use std::time::{Duration, Instant};
+
+/// Longest an identification of the small campaign may take (it takes about 0.1 s).
+const IDENTIFY_LIMIT: Duration = Duration::from_secs(30);
+/// Longest a diagnosis of the small campaign may take (about 10 s on 2 busy cores).
+const DIAGNOSE_LIMIT: Duration = Duration::from_secs(180);
+
+fn base() -> &'static Campaign {
+    static C: OnceLock<Campaign> = OnceLock::new();
+    C.get_or_init(|| {
+        let opts = SynthOptions {
+            seed: 21,
+            random_duration_s: 10.0,
+            tests: Some(
+                ["R1", "R2", "R3", "S1", "S3", "T1"]
+                    .map(String::from)
+                    .to_vec(),
+            ),
+            ..SynthOptions::default()
+        };
+        synthesise(&Params::default(), &opts, None)
+    })
+}
+
+fn channel(r: &mut Record, k: usize) -> &mut Vec<f64> {
+    match k % 7 {
+        0 => &mut r.ref_displacement_m,
+        1 => &mut r.ref_acceleration_m_s2,
+        2 => &mut r.valve_command,
+        3 => &mut r.displacement_m,
+        4 => &mut r.acceleration_m_s2,
+        5 => &mut r.force_n,
+        _ => r.spool_position.as_mut().unwrap(),
+    }
+}
+
+#[derive(Debug, Clone)]
+enum Mutation {
+    Cell(usize, usize, f64, f64),
+    Sign(usize, usize),
+    Scale(usize, usize, i32),
+    Spikes(usize, usize, usize, f64),
+    Truncate(usize, f64),
+    Zero(usize, usize),
+    Frequency(usize, f64),
+    Kind(usize, u8),
+    Amplitude(usize, f64),
+}
+
+fn value() -> impl Strategy<Value = f64> {
+    prop_oneof![
+        Just(f64::NAN),
+        Just(f64::INFINITY),
+        Just(1e300),
+        Just(-1e300),
+        Just(0.0),
+        -1e6..1e6f64,
+    ]
+}
+
+fn mutation() -> impl Strategy<Value = Mutation> {
+    prop_oneof![
+        (0..6usize, 0..7usize, 0.0..1.0f64, value())
+            .prop_map(|(t, c, p, v)| Mutation::Cell(t, c, p, v)),
+        (0..6usize, 0..7usize).prop_map(|(t, c)| Mutation::Sign(t, c)),
+        (0..6usize, 0..7usize, -12..12i32).prop_map(|(t, c, e)| Mutation::Scale(t, c, e)),
+        (0..6usize, 0..7usize, 1..50usize, value())
+            .prop_map(|(t, c, n, v)| Mutation::Spikes(t, c, n, v)),
+        (0..6usize, 0.0..1.0f64).prop_map(|(t, f)| Mutation::Truncate(t, f)),
+        (0..6usize, 0..7usize).prop_map(|(t, c)| Mutation::Zero(t, c)),
+        (0..6usize, value()).prop_map(|(t, v)| Mutation::Frequency(t, v)),
+        (0..6usize, 0..3u8).prop_map(|(t, k)| Mutation::Kind(t, k)),
+        (0..6usize, value()).prop_map(|(t, v)| Mutation::Amplitude(t, v)),
+    ]
+}
+
+fn apply(c: &mut Campaign, m: &Mutation) {
+    match *m {
+        Mutation::Cell(t, k, p, v) => {
+            let x = channel(&mut c.records[t], k);
+            let i = ((x.len() - 1) as f64 * p) as usize;
+            x[i] = v;
+        }
+        Mutation::Sign(t, k) => channel(&mut c.records[t], k)
+            .iter_mut()
+            .for_each(|x| *x = -*x),
+        Mutation::Scale(t, k, e) => channel(&mut c.records[t], k)
+            .iter_mut()
+            .for_each(|x| *x *= 10f64.powi(e)),
+        Mutation::Spikes(t, k, n, v) => {
+            let x = channel(&mut c.records[t], k);
+            let step = (x.len() / n).max(1);
+            x.iter_mut().step_by(step).for_each(|x| *x = v);
+        }
+        Mutation::Truncate(t, f) => {
+            let r = &mut c.records[t];
+            let keep = (r.len() as f64 * f) as usize;
+            r.time_s.truncate(keep);
+            for k in 0..7 {
+                channel(r, k).truncate(keep);
+            }
+            r.ref_velocity_m_s.truncate(keep);
+            r.extra.iter_mut().for_each(|(_, x)| x.truncate(keep));
+        }
+        Mutation::Zero(t, k) => channel(&mut c.records[t], k)
+            .iter_mut()
+            .for_each(|x| *x = 0.0),
+        Mutation::Frequency(t, v) => c.info.tests[t].frequency_hz = Some(v),
+        Mutation::Kind(t, k) => {
+            c.info.tests[t].kind =
+                [TestKind::Random, TestKind::Sine, TestKind::Triangle][k as usize]
+        }
+        Mutation::Amplitude(t, v) => c.info.tests[t].amplitude_m = Some(v),
+    }
+}
+
+/// Every estimate is finite and physical, or absent with a reason in `missing`.
+fn check(id: &Identification) {
+    let j = id.to_json();
+    for (block, key) in [
+        ("servovalve", "gain"),
+        ("servovalve", "natural_frequency_hz"),
+        ("servovalve", "damping_ratio"),
+        ("table", "mass_kg"),
+        ("table", "mass_random_kg"),
+        ("table", "mass_periodic_kg"),
+        ("table", "stiffness_n_m"),
+        ("oil_column", "frequency_hz"),
+        ("oil_column", "damping_ratio"),
+        ("oil_column", "bulk_modulus_pa"),
+        ("friction", "force_n"),
+    ] {
+        let v = &j[block][key];
+        assert!(
+            v.is_null() || v.as_f64().is_some_and(f64::is_finite),
+            "{block}.{key}: {v}"
+        );
+    }
+    for key in ["mass_kg", "mass_random_kg", "mass_periodic_kg"] {
+        if let Some(m) = j["table"][key].as_f64() {
+            assert!(
+                m >= MASS_BOUNDS_KG[0] && m <= MASS_BOUNDS_KG[1],
+                "{key} {m}"
+            );
+        }
+    }
+    if let Some(f) = j["oil_column"]["frequency_hz"].as_f64() {
+        assert!(f > 0.0, "{f}");
+    }
+    // nothing is absent without a reason
+    let absent = [
+        id.servovalve.is_none(),
+        id.mass_kg.is_none(),
+        id.oil_column.is_none(),
+        id.friction.is_none(),
+    ];
+    if absent.iter().any(|&a| a) {
+        assert!(!id.missing.is_empty());
+    }
+    for m in &id.missing {
+        assert!(!m.is_empty());
+    }
+}
+
+proptest! {
+    #![proptest_config(ProptestConfig { cases: 48, failure_persistence: None, ..ProptestConfig::default() })]
+
+    #[test]
+    fn mutated_campaign_is_screened_and_identified_sanely(ms in prop::collection::vec(mutation(), 1..4)) {
+        let mut c = base().clone();
+        for m in &ms {
+            apply(&mut c, m);
+        }
+        let _ = screen(&c);
+        let t0 = Instant::now();
+        let id = identify(&c);
+        prop_assert!(t0.elapsed() < IDENTIFY_LIMIT, "{:?}", t0.elapsed());
+        check(&id);
+    }
+}
+
+proptest! {
+    #![proptest_config(ProptestConfig { cases: 4, failure_persistence: None, ..ProptestConfig::default() })]
+
+    /// Fewer cases: a diagnosis that runs takes seconds.
+    #[test]
+    fn mutated_campaign_is_diagnosed_or_refused(m in mutation()) {
+        let mut c = base().clone();
+        apply(&mut c, &m);
+        let t0 = Instant::now();
+        match shaketable::diagnose::diagnose(&c, None) {
+            Ok(d) => {
+                check(&d.identification);
+                prop_assert!(d.gain.is_finite() || d.cause.is_none());
+            }
+            Err(e) => prop_assert!(e.contains("refused"), "{e}"),
+        }
+        prop_assert!(t0.elapsed() < DIAGNOSE_LIMIT, "{:?}", t0.elapsed());
+    }
+}
+
+/// A missing record is an error naming the file.
+#[test]
+fn missing_file_is_named() {
+    let tmp = tempfile::tempdir().unwrap();
+    let dir = tmp.path().join("c");
+    write_campaign(base(), &dir).unwrap();
+    std::fs::remove_file(dir.join("S3.csv")).unwrap();
+    let e = read_campaign(&dir).unwrap_err().to_string();
+    assert!(e.contains("S3.csv"), "{e}");
+}
+
+/// The binary: a flipped force channel is screened (exit 0, finding printed) by
+/// `identify` and `campaign check`; an all-zero R1 makes `diagnose` refuse (exit 1).
+#[test]
+fn cli_exit_codes() {
+    let bin = env!("CARGO_BIN_EXE_shaketable");
+    let tmp = tempfile::tempdir().unwrap();
+    let dir = tmp.path().join("c");
+    let mut c = base().clone();
+    c.records[1].force_n.iter_mut().for_each(|x| *x = -*x);
+    c.records[0].valve_command.iter_mut().for_each(|x| *x = 0.0);
+    write_campaign(&c, &dir).unwrap();
+    let run = |args: &[&str]| std::process::Command::new(bin).args(args).output().unwrap();
+    let d = dir.to_str().unwrap();
+    let o = run(&["identify", d]);
+    let out = String::from_utf8_lossy(&o.stdout);
+    assert_eq!(
+        o.status.code(),
+        Some(0),
+        "{}",
+        String::from_utf8_lossy(&o.stderr)
+    );
+    assert!(out.contains("R2 (R2.csv), force_n"), "{out}");
+    let o = run(&["campaign", "check", d]);
+    let out = String::from_utf8_lossy(&o.stdout);
+    assert!(out.contains("screening: R2 (R2.csv), force_n"), "{out}");
+    let o = run(&["diagnose", d, "--quiet"]);
+    assert_eq!(o.status.code(), Some(1));
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert!(err.contains("refused") && err.contains("R1"), "{err}");
+}
