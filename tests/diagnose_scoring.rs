@@ -5,6 +5,7 @@
 //! follow sample by sample, scores better than the baseline under the predictive score.
 
 use shaketable::campaign::synth::{synthesise, NoiseLevels, SynthOptions};
+use shaketable::diagnose::residuals::test_scores_in_envelope;
 use shaketable::diagnose::{estimate_noise, predict, ratios, scores, Part};
 use shaketable::Params;
 
@@ -134,4 +135,39 @@ fn stick_slip_chatter_is_judged_by_its_spread_not_its_phase() {
     );
     // under the predictive score the truth wins clearly
     assert!(b_score > 1.5 * t_score, "score {t_score} vs {b_score}");
+}
+
+/// Spec section 8 in the diagnosis: a trial model whose held-out run leaves the operating
+/// envelope (here a stroke of 2 cm, which the 5-cm sines pass) scores infinitely bad on
+/// that test, while the same model inside a wide envelope scores finitely; tests it stays
+/// inside of keep their finite scores.
+#[test]
+fn a_trial_model_outside_the_envelope_scores_infinitely_bad() {
+    let p = Params::trees_lab();
+    let opts = SynthOptions {
+        seed: 11,
+        random_duration_s: 12.0,
+        tests: Some(vec!["S3".into(), "R2".into()]),
+        ..SynthOptions::default()
+    };
+    let c = synthesise(&p, &opts, None);
+    let noise = estimate_noise(&c);
+    let s3 = c.info.tests.iter().position(|t| t.name == "S3").unwrap();
+    let r2 = c.info.tests.iter().position(|t| t.name == "R2").unwrap();
+    let inside = test_scores_in_envelope(&p, &c, s3, Part::HeldOut, &noise);
+    assert!(inside.score.iter().any(|x| x.is_finite()), "{inside:?}");
+    let mut narrow = p;
+    narrow.limits.stroke_m = 0.02;
+    let outside = test_scores_in_envelope(&narrow, &c, s3, Part::HeldOut, &noise);
+    assert!(
+        outside.score.iter().all(|x| *x == f64::INFINITY),
+        "{outside:?}"
+    );
+    assert!(outside.residual.iter().all(|x| *x == f64::INFINITY));
+    // R2 (0.1 g random, millimetres of stroke) stays inside even the narrow envelope
+    let r2_narrow = test_scores_in_envelope(&narrow, &c, r2, Part::HeldOut, &noise);
+    assert!(
+        r2_narrow.score.iter().any(|x| x.is_finite()),
+        "{r2_narrow:?}"
+    );
 }

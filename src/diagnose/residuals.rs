@@ -733,6 +733,30 @@ pub fn test_scores(
     scores(&c.records[i], &pred, noise, part, c.info.sample_rate_hz)
 }
 
+/// [`test_scores`] of a trial model held to the operating envelope (spec section 8):
+/// where its noise-free run leaves the envelope over `part`, while the measured table did
+/// not, the model describes nothing real there and every cell of the test scores
+/// infinitely bad. (The fits themselves run with the divergence guards only,
+/// [`simulate_test_with`], so an optimiser keeps a finite cost on its way.)
+pub fn test_scores_in_envelope(
+    p: &Params,
+    c: &Campaign,
+    i: usize,
+    part: Part,
+    noise: &NoiseFloor,
+) -> CellScores {
+    let pred = predict(p, c, i, part.simulated(), noise);
+    let range = part.range(c.records[i].len());
+    let locked = &pred.locked[range.start..range.end.min(pred.locked.len())];
+    if crate::model::limits::first_exceeded(p, locked).is_some() {
+        return CellScores {
+            score: [f64::INFINITY; 5],
+            residual: [f64::INFINITY; 5],
+        };
+    }
+    scores(&c.records[i], &pred, noise, part, c.info.sample_rate_hz)
+}
+
 /// Sum over `tests` and channels of the squared predictive scores over `part`: the
 /// objective of the fits that cannot use sample-wise least squares (stick-slip).
 pub fn score_sum(p: &Params, c: &Campaign, tests: &[usize], noise: &NoiseFloor, part: Part) -> f64 {
