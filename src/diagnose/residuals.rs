@@ -729,8 +729,7 @@ pub fn test_scores(
     part: Part,
     noise: &NoiseFloor,
 ) -> CellScores {
-    let pred = predict(p, c, i, part.simulated(), noise);
-    scores(&c.records[i], &pred, noise, part, c.info.sample_rate_hz)
+    test_scores_held(p, c, i, part, noise, false)
 }
 
 /// [`test_scores`] of a trial model held to the operating envelope (spec section 8):
@@ -745,10 +744,21 @@ pub fn test_scores_in_envelope(
     part: Part,
     noise: &NoiseFloor,
 ) -> CellScores {
+    test_scores_held(p, c, i, part, noise, true)
+}
+
+fn test_scores_held(
+    p: &Params,
+    c: &Campaign,
+    i: usize,
+    part: Part,
+    noise: &NoiseFloor,
+    to_envelope: bool,
+) -> CellScores {
     let pred = predict(p, c, i, part.simulated(), noise);
     let range = part.range(c.records[i].len());
     let locked = &pred.locked[range.start..range.end.min(pred.locked.len())];
-    if crate::model::limits::first_exceeded(p, locked).is_some() {
+    if to_envelope && crate::model::limits::first_exceeded(p, locked).is_some() {
         return CellScores {
             score: [f64::INFINITY; 5],
             residual: [f64::INFINITY; 5],
