@@ -137,6 +137,7 @@ fn run_case(base: &Params, effect: Option<&str>, seed: u64) -> (Outcome, Option<
         .output()
         .unwrap();
     assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    dump(&json, effect.unwrap_or("none"), seed);
     let v: serde_json::Value =
         serde_json::from_str(&std::fs::read_to_string(&json).unwrap()).unwrap();
     let out = Outcome {
@@ -145,6 +146,17 @@ fn run_case(base: &Params, effect: Option<&str>, seed: u64) -> (Outcome, Option<
         gain: v["gain"].as_f64().unwrap(),
     };
     (out, main, spec.unwrap_or_else(|| "none".into()))
+}
+
+/// Keeps a copy of the diagnosis JSON as `<effect>-<seed>.json` in the folder named by
+/// `SHAKETABLE_DIAGNOSIS_DUMP`, when set: `scripts/behaviour_check.sh` compares these
+/// byte for byte before and after a change meant to leave behaviour unchanged.
+fn dump(json: &std::path::Path, effect: &str, seed: u64) {
+    if let Ok(dir) = std::env::var("SHAKETABLE_DIAGNOSIS_DUMP") {
+        let dir = std::path::Path::new(&dir);
+        std::fs::create_dir_all(dir).unwrap();
+        std::fs::copy(json, dir.join(format!("{effect}-{seed}.json"))).unwrap();
+    }
 }
 
 /// The committed seed, or every seed of `SHAKETABLE_HIDDEN_SEEDS` (comma-separated) when
