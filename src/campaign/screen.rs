@@ -1,12 +1,18 @@
 //! Screening of every record before estimation (issue 14, item 7): non-finite samples,
 //! isolated spikes, flat (silent) channels, sign conventions that contradict physics and a
-//! declared `kind` that contradicts the reference. Isolated bad samples are repaired by
+//! declared `kind` that contradicts the reference or a force sign that contradicts the
+//! energy balance ([`kind`]). Isolated bad samples are repaired by
 //! linear interpolation with a note; anything worse excludes the test from estimation
 //! with the reason. Estimators then see only the screened campaign.
 
 use super::{Campaign, Record, TestKind, TestSpec};
 use serde::Serialize;
-use std::f64::consts::PI;
+
+mod kind;
+pub use kind::{
+    NET_WORK_SIGN_MIN, SINE_EXPLAINED_MIN, TRIANGLE_CONSTANT_SPEED_MIN,
+    TRIANGLE_FREQUENCY_TOLERANCE,
+};
 
 /// A sample is a spike when it lies this many robust standard deviations (1.4826 MAD)
 /// from the record's median *and* from the median of its 7 neighbours. A Gaussian
@@ -26,9 +32,6 @@ pub const MIN_RECORD_SAMPLES: usize = 64;
 /// below minus this: a flipped channel gives about -0.9, an honest one noise-level
 /// values near 0 at worst, so the margin leaves no doubt.
 pub const SIGN_CORRELATION_MIN: f64 = 0.3;
-/// A `sine` test's reference must be explained to this fraction of its variance by a
-/// sine at the declared frequency (the ramps cost a few percent).
-pub const SINE_EXPLAINED_MIN: f64 = 0.8;
 
 /// What screening did about a finding.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize)]
@@ -153,7 +156,7 @@ fn screen_record(spec: &TestSpec, r: &mut Record, fs: f64, out: &mut Vec<Finding
         return false;
     }
     ok &= check_signs(spec, r, fs, out);
-    ok &= check_kind(spec, r, fs, out);
+    ok &= kind::check_periodic(spec, r, fs, out);
     ok
 }
 
@@ -328,49 +331,6 @@ fn check_signs(spec: &TestSpec, r: &Record, fs: f64, out: &mut Vec<Finding>) -> 
         }
     }
     ok
-}
-
-/// A declared `sine` test whose reference is not a sine at `frequency_hz`.
-fn check_kind(spec: &TestSpec, r: &Record, fs: f64, out: &mut Vec<Finding>) -> bool {
-    if spec.kind != TestKind::Sine {
-        return true;
-    }
-    let Some(f) = spec.frequency_hz.filter(|f| f.is_finite() && *f > 0.0) else {
-        return true;
-    };
-    let x = &r.ref_displacement_m;
-    let n = x.len() as f64;
-    let mean = x.iter().sum::<f64>() / n;
-    let (mut s, mut c, mut ss, mut cc, mut sc, mut var) = (0.0, 0.0, 0.0, 0.0, 0.0, 0.0);
-    for (k, v) in x.iter().enumerate() {
-        let ph = 2.0 * PI * f * k as f64 / fs;
-        let (a, b) = (ph.sin(), ph.cos());
-        let y = v - mean;
-        s += y * a;
-        c += y * b;
-        ss += a * a;
-        cc += b * b;
-        sc += a * b;
-        var += y * y;
-    }
-    // least squares on [sin, cos]: explained variance
-    let det = ss * cc - sc * sc;
-    let explained = if det > 0.0 && var > 0.0 {
-        let (p, q) = ((cc * s - sc * c) / det, (ss * c - sc * s) / det);
-        (p * s + q * c) / var
-    } else {
-        0.0
-    };
-    if explained < SINE_EXPLAINED_MIN {
-        let msg = format!(
-            "declared a sine at {f} Hz but such a sine explains {:.0} % of the reference (at least {:.0} % needed)",
-            100.0 * explained.max(0.0),
-            100.0 * SINE_EXPLAINED_MIN
-        );
-        out.push(finding("ref_displacement_m", Action::TestExcluded, msg));
-        return false;
-    }
-    true
 }
 
 #[cfg(test)]
