@@ -1,6 +1,8 @@
 //! Signals shared by the integration tests: references with consistent derivatives.
 #![allow(dead_code)]
 
+pub mod fmu;
+
 use shaketable::campaign::synth::ReferenceSignal;
 use shaketable::{Inputs, Reference};
 use std::f64::consts::PI;
