@@ -202,7 +202,10 @@ mod tests {
 
     /// The paper program's test `name` (T1: a 0.05 m triangle at 0.05 Hz).
     fn paper_test(name: &str) -> TestSpec {
-        paper_program(30.0).into_iter().find(|t| t.name == name).unwrap()
+        paper_program(30.0)
+            .into_iter()
+            .find(|t| t.name == name)
+            .unwrap()
     }
 
     fn triangle(spec: &TestSpec) -> Vec<f64> {
@@ -271,18 +274,43 @@ mod tests {
         let t = paper_test("T3");
         let f = t.frequency_hz.unwrap();
         let mut out = Vec::new();
-        assert!(check_force_work(&record(triangle(&t), 1.0, f), f, FS, &mut out));
-        assert!(!check_force_work(&record(triangle(&t), -1.0, f), f, FS, &mut out));
+        assert!(check_force_work(
+            &record(triangle(&t), 1.0, f),
+            f,
+            FS,
+            &mut out
+        ));
+        assert!(!check_force_work(
+            &record(triangle(&t), -1.0, f),
+            f,
+            FS,
+            &mut out
+        ));
         assert!(out[0].message.contains("net work"), "{out:?}");
         // a slow sine (0.1 Hz, 0.1 m): friction dominates the work
         let slow = sine(0.1, 0.1, 30.0);
-        assert!(check_force_work(&record(slow.clone(), 1.0, 0.1), 0.1, FS, &mut out));
-        assert!(!check_force_work(&record(slow, -1.0, 0.1), 0.1, FS, &mut out));
+        assert!(check_force_work(
+            &record(slow.clone(), 1.0, 0.1),
+            0.1,
+            FS,
+            &mut out
+        ));
+        assert!(!check_force_work(
+            &record(slow, -1.0, 0.1),
+            0.1,
+            FS,
+            &mut out
+        ));
         // 8 Hz, 5 mm: inertia's work cancels over cycles and friction's is small: the
         // check cannot tell, so it says nothing rather than guess
         let fast = sine(8.0, 0.005, 5.0);
         let mut out = Vec::new();
-        assert!(check_force_work(&record(fast.clone(), 1.0, 8.0), 8.0, FS, &mut out));
+        assert!(check_force_work(
+            &record(fast.clone(), 1.0, 8.0),
+            8.0,
+            FS,
+            &mut out
+        ));
         let flipped = record(fast, -1.0, 8.0);
         assert!(check_force_work(&flipped, 8.0, FS, &mut out), "{out:?}");
     }

@@ -1,0 +1,417 @@
+//! CSV records: parsing, the time-column rules and the record built from the columns.
+
+use super::*;
+
+/// A parsed CSV: channel names, columns, and the physical line of the header and of
+/// every data row.
+pub(super) struct CsvTable {
+    pub(super) names: Vec<String>,
+    pub(super) columns: Vec<Vec<f64>>,
+    pub(super) header_line: usize,
+    pub(super) row_lines: Vec<usize>,
+}
+
+impl CsvTable {
+    pub(super) fn index(&self, name: &str) -> Option<usize> {
+        self.names.iter().position(|n| n == name)
+    }
+
+    pub(super) fn take(&mut self, name: &str) -> Option<Vec<f64>> {
+        self.index(name)
+            .map(|i| std::mem::take(&mut self.columns[i]))
+    }
+}
+
+pub(super) fn unquote(cell: &str) -> &str {
+    let c = cell.trim();
+    if c.len() >= 2 && c.starts_with('"') && c.ends_with('"') {
+        c[1..c.len() - 1].trim()
+    } else {
+        c
+    }
+}
+
+/// Parse CSV text: header, rows, every cell a finite number, no ragged rows.
+pub(super) fn parse_csv(text: &str, file: &str) -> Result<CsvTable, CampaignError> {
+    let err = |line: usize, message: String| CampaignError::Csv {
+        file: file.to_string(),
+        line,
+        message,
+    };
+    let mut names: Vec<String> = Vec::new();
+    let mut columns: Vec<Vec<f64>> = Vec::new();
+    let mut header_line = 0usize;
+    let mut row_lines = Vec::new();
+    let mut last_line = 0usize;
+    // a UTF-8 byte-order mark (spreadsheet exports) is not part of the first channel name
+    let text = text.strip_prefix('\u{feff}').unwrap_or(text);
+    for (i, line) in lines_any(text).enumerate() {
+        let line_no = i + 1;
+        let trimmed = line.trim_start();
+        if trimmed.is_empty() {
+            continue;
+        }
+        last_line = line_no;
+        if trimmed.starts_with('#') {
+            continue;
+        }
+        if header_line == 0 {
+            header_line = line_no;
+            for (j, cell) in line.split(',').enumerate() {
+                let name = unquote(cell);
+                if name.is_empty() {
+                    return Err(err(
+                        line_no,
+                        format!("header: column {} has no name", j + 1),
+                    ));
+                }
+                if names.iter().any(|n| n == name) {
+                    return Err(err(
+                        line_no,
+                        format!("header: channel `{name}` appears twice"),
+                    ));
+                }
+                if name.parse::<f64>().is_ok() {
+                    return Err(err(
+                        line_no,
+                        format!("header expected (channel names), found the number `{name}`"),
+                    ));
+                }
+                names.push(name.to_string());
+            }
+            let cap = text.len() / (line.len() + 1).max(8);
+            columns = (0..names.len()).map(|_| Vec::with_capacity(cap)).collect();
+            continue;
+        }
+        let mut n = 0usize;
+        for cell in line.split(',') {
+            if n >= names.len() {
+                let count = line.split(',').count();
+                return Err(err(
+                    line_no,
+                    format!(
+                        "ragged row: {count} cells but the header (line {header_line}) has {} channels",
+                        names.len()
+                    ),
+                ));
+            }
+            let c = unquote(cell);
+            let v: f64 = c.parse().map_err(|_| {
+                if c.is_empty() {
+                    err(line_no, format!("channel `{}`: empty cell", names[n]))
+                } else {
+                    err(
+                        line_no,
+                        format!("channel `{}`: `{c}` is not a number", names[n]),
+                    )
+                }
+            })?;
+            if !v.is_finite() {
+                return Err(err(
+                    line_no,
+                    format!(
+                        "channel `{}`: `{c}` is not finite (NaN or infinity)",
+                        names[n]
+                    ),
+                ));
+            }
+            columns[n].push(v);
+            n += 1;
+        }
+        if n != names.len() {
+            return Err(err(
+                line_no,
+                format!(
+                    "ragged row: {n} cells but the header (line {header_line}) has {} channels",
+                    names.len()
+                ),
+            ));
+        }
+        row_lines.push(line_no);
+    }
+    if header_line == 0 {
+        return Err(err(
+            last_line.max(1),
+            "empty record: no header line and no samples".to_string(),
+        ));
+    }
+    if row_lines.is_empty() {
+        return Err(err(
+            header_line,
+            "empty record: a header but no samples".to_string(),
+        ));
+    }
+    Ok(CsvTable {
+        names,
+        columns,
+        header_line,
+        row_lines,
+    })
+}
+
+pub(super) fn require_channels(
+    t: &CsvTable,
+    required: &[&str],
+    file: &str,
+) -> Result<(), CampaignError> {
+    let missing: Vec<&str> = required
+        .iter()
+        .copied()
+        .filter(|c| t.index(c).is_none())
+        .collect();
+    if missing.is_empty() {
+        return Ok(());
+    }
+    Err(CampaignError::Csv {
+        file: file.to_string(),
+        line: t.header_line,
+        message: format!(
+            "missing required channel{} {} (the header has: {})",
+            if missing.len() > 1 { "s" } else { "" },
+            missing
+                .iter()
+                .map(|c| format!("`{c}`"))
+                .collect::<Vec<_>>()
+                .join(", "),
+            t.names.join(", ")
+        ),
+    })
+}
+
+/// Check the time column: strictly increasing; its own rate (see [`TimeGrid`]) within
+/// [`RATE_TOLERANCE`] of `sample_rate_hz` (or, when `None`, taken as the rate); every
+/// sample on its uniform grid. Returns the sample rate.
+pub(super) fn check_time(
+    t: &CsvTable,
+    time: &[f64],
+    sample_rate_hz: Option<f64>,
+    rate_source: &str,
+    file: &str,
+) -> Result<f64, CampaignError> {
+    let err = |line: usize, message: String| CampaignError::Csv {
+        file: file.to_string(),
+        line,
+        message,
+    };
+    let n = time.len();
+    for k in 1..n {
+        if time[k] <= time[k - 1] {
+            return Err(err(
+                t.row_lines[k],
+                format!(
+                    "time_s is not increasing: {} after {} (line {})",
+                    time[k],
+                    time[k - 1],
+                    t.row_lines[k - 1]
+                ),
+            ));
+        }
+    }
+    if n < 2 {
+        return match sample_rate_hz {
+            Some(fs) => Ok(fs),
+            None => Err(err(
+                t.row_lines[0],
+                "a single sample: the sample rate cannot be inferred from time_s".to_string(),
+            )),
+        };
+    }
+    let grid = TimeGrid::fit(time);
+    let fs = match sample_rate_hz {
+        Some(fs) => {
+            let clock = grid.rate_hz();
+            if ((clock - fs) / fs).abs() > RATE_TOLERANCE {
+                return Err(err(
+                    t.row_lines[1],
+                    format!(
+                        "sample rate disagrees: time column gives {} Hz, {rate_source} says {} Hz \
+                         (more than {} % apart)",
+                        num(round_sig(clock, 7)),
+                        num(fs),
+                        RATE_TOLERANCE * 100.0
+                    ),
+                ));
+            }
+            fs
+        }
+        None => {
+            let fs = grid.rate_hz();
+            if (fs - fs.round()).abs() < 1e-6 * fs {
+                fs.round()
+            } else {
+                fs
+            }
+        }
+    };
+    if let Some(k) = grid.first_off_grid(time) {
+        let expected = grid.at(k as f64);
+        // a start at 0 shows as 0, not as the fit's rounding residue
+        let t0 = if grid.t0.abs() < 1e-6 * grid.step {
+            0.0
+        } else {
+            grid.t0
+        };
+        return Err(err(
+            t.row_lines[k],
+            format!(
+                "non-uniform time: sample {k} is at time_s = {} but the time column's own \
+                 uniform grid ({} Hz from {}) puts it at {} (step here {} s, expected {} s)",
+                time[k],
+                num(round_sig(grid.rate_hz(), 7)),
+                num(t0),
+                num(expected),
+                num(round_sig(
+                    if k > 0 { time[k] - time[k - 1] } else { 0.0 },
+                    6
+                )),
+                num(round_sig(grid.step, 6)),
+            ),
+        ));
+    }
+    Ok(fs)
+}
+
+/// `x` for a message: 9 significant digits, exponent notation when very large or small.
+pub(super) fn num(x: f64) -> String {
+    let r = round_sig(x, 9);
+    if r != 0.0 && r.is_finite() && (r.abs() >= 1e7 || r.abs() < 1e-4) {
+        format!("{r:e}")
+    } else {
+        format!("{r}")
+    }
+}
+
+/// `x` rounded to `digits` significant digits (for messages).
+pub(super) fn round_sig(x: f64, digits: usize) -> f64 {
+    format!("{x:.*e}", digits.saturating_sub(1))
+        .parse()
+        .unwrap_or(x)
+}
+
+/// The uniform grid a time column follows: `t0 + j * step`, fitted by least squares over
+/// every sample, where `j` counts steps of the median step (so a gap counts as two steps
+/// and does not bias the fit). The rate rule compares `1 / step` with the declared rate;
+/// the uniformity rule compares each sample with this grid, so a small constant rate
+/// offset never accumulates into "non-uniform time", and jitter, gaps and drift still do.
+#[derive(Clone, Copy)]
+pub(super) struct TimeGrid {
+    t0: f64,
+    step: f64,
+    median: f64,
+}
+
+impl TimeGrid {
+    /// Fit the grid of a strictly increasing time column of at least 2 samples: a least
+    /// squares line, then again without the samples off that line (so one late sample
+    /// does not tilt the grid of a short record).
+    fn fit(time: &[f64]) -> TimeGrid {
+        let mut steps: Vec<f64> = time.windows(2).map(|w| w[1] - w[0]).collect();
+        let mid = steps.len() / 2;
+        let (_, &mut median, _) = steps.select_nth_unstable_by(mid, f64::total_cmp);
+        let first = TimeGrid {
+            t0: time[0],
+            step: median,
+            median,
+        }
+        .refit(time, None);
+        first.refit(time, Some(GRID_TOLERANCE * first.step))
+    }
+
+    /// The least-squares grid of the samples within `tol` of this grid (all if `None`).
+    fn refit(&self, time: &[f64], tol: Option<f64>) -> TimeGrid {
+        let keep = |j: f64, t: f64| tol.is_none_or(|tol| (t - self.at(j)).abs() <= tol);
+        let (mut n, mut sj, mut st) = (0.0, 0.0, 0.0);
+        for (j, &t) in self.indices(time).zip(time) {
+            if keep(j, t) {
+                (n, sj, st) = (n + 1.0, sj + j, st + t);
+            }
+        }
+        let (mj, mt) = (sj / n, st / n);
+        let (mut sjt, mut sjj) = (0.0, 0.0);
+        for (j, &t) in self.indices(time).zip(time) {
+            if keep(j, t) {
+                sjt += (j - mj) * (t - mt);
+                sjj += (j - mj) * (j - mj);
+            }
+        }
+        if !(n >= 2.0 && sjj > 0.0 && sjt > 0.0) {
+            return *self;
+        }
+        let step = sjt / sjj;
+        TimeGrid {
+            t0: mt - step * mj,
+            step,
+            median: self.median,
+        }
+    }
+
+    /// The grid time of index `j`.
+    fn at(&self, j: f64) -> f64 {
+        self.t0 + j * self.step
+    }
+
+    fn rate_hz(&self) -> f64 {
+        1.0 / self.step
+    }
+
+    /// The grid index of every sample: each step counts as a whole number of median
+    /// steps (1 normally, 2 across a missing sample), added one step at a time so that
+    /// a small rate offset never rounds to the wrong index.
+    fn indices<'a>(&self, time: &'a [f64]) -> impl Iterator<Item = f64> + 'a {
+        let median = self.median;
+        let mut j = 0.0;
+        let mut prev = time[0];
+        time.iter().map(move |&t| {
+            j += ((t - prev) / median).round();
+            prev = t;
+            j
+        })
+    }
+
+    /// The first sample off its place `t0 + k * step` by more than [`GRID_TOLERANCE`]
+    /// of a step (jitter, drift), or where a step is not one step (a gap, a doubled sample).
+    fn first_off_grid(&self, time: &[f64]) -> Option<usize> {
+        let tol = GRID_TOLERANCE * self.step;
+        self.indices(time)
+            .zip(time)
+            .enumerate()
+            .position(|(k, (j, &t))| j != k as f64 || (t - self.at(j)).abs() > tol)
+    }
+}
+
+pub(super) fn record_from_table(mut t: CsvTable) -> Record {
+    let mut take = |name: &str| t.take(name).unwrap_or_default();
+    let time_s = take("time_s");
+    let ref_displacement_m = take("ref_displacement_m");
+    let ref_velocity_m_s = take("ref_velocity_m_s");
+    let ref_acceleration_m_s2 = take("ref_acceleration_m_s2");
+    let valve_command = take("valve_command");
+    let displacement_m = take("displacement_m");
+    let acceleration_m_s2 = take("acceleration_m_s2");
+    let force_n = take("force_n");
+    let spool_position = t.take(SPOOL_CHANNEL);
+    let known: Vec<&str> = REQUIRED_CHANNELS
+        .iter()
+        .copied()
+        .chain(std::iter::once(SPOOL_CHANNEL))
+        .collect();
+    let extra = t
+        .names
+        .iter()
+        .zip(t.columns.iter_mut())
+        .filter(|(n, _)| !known.contains(&n.as_str()))
+        .map(|(n, c)| (n.clone(), std::mem::take(c)))
+        .collect();
+    Record {
+        time_s,
+        ref_displacement_m,
+        ref_velocity_m_s,
+        ref_acceleration_m_s2,
+        valve_command,
+        spool_position,
+        displacement_m,
+        acceleration_m_s2,
+        force_n,
+        extra,
+    }
+}
