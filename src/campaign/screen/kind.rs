@@ -177,8 +177,8 @@ fn check_force_work(r: &Record, f: f64, fs: f64, out: &mut Vec<Finding>) -> bool
     }
     let mean = r.force_n[..n].iter().sum::<f64>() / n as f64;
     let (mut net, mut gross) = (0.0, 0.0);
-    for k in 0..n {
-        let p = (r.force_n[k] - mean) * v[k];
+    for (force, speed) in r.force_n[..n].iter().zip(&v) {
+        let p = (force - mean) * speed;
         net += p;
         gross += p.abs();
     }
