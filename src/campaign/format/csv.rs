@@ -2,11 +2,14 @@
 
 use super::*;
 
-/// A parsed CSV: channel names, columns, and the physical line of the header and of
-/// every data row.
+/// A parsed text record: column names, columns, and the physical line of the header
+/// (0 when the file has none) and of every data row. In a lenient parse a column that
+/// is not all finite numbers keeps its first bad cell in `bad`: an error only when the
+/// column is used.
 pub(super) struct CsvTable {
     pub(super) names: Vec<String>,
     pub(super) columns: Vec<Vec<f64>>,
+    pub(super) bad: Vec<Option<(usize, String)>>,
     pub(super) header_line: usize,
     pub(super) row_lines: Vec<usize>,
 }
@@ -31,122 +34,155 @@ pub(super) fn unquote(cell: &str) -> &str {
     }
 }
 
-/// Parse CSV text: header, rows, every cell a finite number, no ragged rows.
-pub(super) fn parse_csv(text: &str, file: &str) -> Result<CsvTable, CampaignError> {
+/// The cells of one line under `opts`' delimiter.
+fn cells<'a>(line: &'a str, opts: &ReadOptions) -> Vec<&'a str> {
+    match opts.delimiter {
+        Delimiter::Whitespace => line.split_whitespace().collect(),
+        Delimiter::Char(c) => line.split(c).collect(),
+    }
+}
+
+/// A cell as a finite number, or the message saying why not.
+fn cell_value(name: &str, c: &str) -> Result<f64, String> {
+    match c.parse::<f64>() {
+        Ok(v) if v.is_finite() => Ok(v),
+        Ok(_) => Err(format!(
+            "channel `{name}`: `{c}` is not finite (NaN or infinity)"
+        )),
+        Err(_) if c.is_empty() => Err(format!("channel `{name}`: empty cell")),
+        Err(_) => Err(format!("channel `{name}`: `{c}` is not a number")),
+    }
+}
+
+/// The header's column names (checked), or `1, 2, ...` for a file without one.
+fn header_names(cells: &[&str], line_no: usize, file: &str) -> Result<Vec<String>, CampaignError> {
+    let err = |message: String| CampaignError::Csv {
+        file: file.to_string(),
+        line: line_no,
+        message,
+    };
+    let mut names: Vec<String> = Vec::new();
+    for (j, cell) in cells.iter().enumerate() {
+        let name = unquote(cell);
+        if name.is_empty() {
+            return Err(err(format!("header: column {} has no name", j + 1)));
+        }
+        if names.iter().any(|n| n == name) {
+            return Err(err(format!("header: channel `{name}` appears twice")));
+        }
+        if name.parse::<f64>().is_ok() {
+            return Err(err(format!(
+                "header expected (channel names), found the number `{name}`"
+            )));
+        }
+        names.push(name.to_string());
+    }
+    Ok(names)
+}
+
+/// Parse a text record under `opts` (campaign-format.md; `[read]`). `strict` is the
+/// project's own form: every cell a finite number and every row as long as the header.
+/// Otherwise (a laboratory's file read in place) columns may hold text (a date, an event
+/// note) and rows may end early (empty trailing cells): such cells are errors only in a
+/// column that is used. A row longer than the header is always an error.
+pub(super) fn parse_csv(
+    text: &str,
+    file: &str,
+    opts: &ReadOptions,
+    strict: bool,
+) -> Result<CsvTable, CampaignError> {
     let err = |line: usize, message: String| CampaignError::Csv {
         file: file.to_string(),
         line,
         message,
     };
-    let mut names: Vec<String> = Vec::new();
-    let mut columns: Vec<Vec<f64>> = Vec::new();
-    let mut header_line = 0usize;
-    let mut row_lines = Vec::new();
+    let mut t = CsvTable {
+        names: Vec::new(),
+        columns: Vec::new(),
+        bad: Vec::new(),
+        header_line: 0,
+        row_lines: Vec::new(),
+    };
+    let mut have_names = false;
     let mut last_line = 0usize;
     // a UTF-8 byte-order mark (spreadsheet exports) is not part of the first channel name
     let text = text.strip_prefix('\u{feff}').unwrap_or(text);
     for (i, line) in lines_any(text).enumerate() {
         let line_no = i + 1;
         let trimmed = line.trim_start();
-        if trimmed.is_empty() {
+        if matches!(opts.header_line, Some(h) if line_no < h) || trimmed.is_empty() {
             continue;
         }
         last_line = line_no;
-        if trimmed.starts_with('#') {
+        if !opts.comment.is_empty() && trimmed.starts_with(opts.comment.as_str()) {
             continue;
         }
-        if header_line == 0 {
-            header_line = line_no;
-            for (j, cell) in line.split(',').enumerate() {
-                let name = unquote(cell);
-                if name.is_empty() {
-                    return Err(err(
-                        line_no,
-                        format!("header: column {} has no name", j + 1),
-                    ));
-                }
-                if names.iter().any(|n| n == name) {
-                    return Err(err(
-                        line_no,
-                        format!("header: channel `{name}` appears twice"),
-                    ));
-                }
-                if name.parse::<f64>().is_ok() {
-                    return Err(err(
-                        line_no,
-                        format!("header expected (channel names), found the number `{name}`"),
-                    ));
-                }
-                names.push(name.to_string());
+        let row = cells(line, opts);
+        if !have_names {
+            have_names = true;
+            if opts.header_line == Some(0) {
+                t.names = (1..=row.len()).map(|j| j.to_string()).collect();
+            } else {
+                t.header_line = line_no;
+                t.names = header_names(&row, line_no, file)?;
+                let cap = text.len() / (line.len() + 1).max(8);
+                t.columns = (0..t.names.len())
+                    .map(|_| Vec::with_capacity(cap))
+                    .collect();
+                t.bad = vec![None; t.names.len()];
+                continue;
             }
-            let cap = text.len() / (line.len() + 1).max(8);
-            columns = (0..names.len()).map(|_| Vec::with_capacity(cap)).collect();
-            continue;
+            t.columns = (0..t.names.len()).map(|_| Vec::new()).collect();
+            t.bad = vec![None; t.names.len()];
         }
-        let mut n = 0usize;
-        for cell in line.split(',') {
-            if n >= names.len() {
-                let count = line.split(',').count();
-                return Err(err(
-                    line_no,
-                    format!(
-                        "ragged row: {count} cells but the header (line {header_line}) has {} channels",
-                        names.len()
-                    ),
-                ));
-            }
-            let c = unquote(cell);
-            let v: f64 = c.parse().map_err(|_| {
-                if c.is_empty() {
-                    err(line_no, format!("channel `{}`: empty cell", names[n]))
-                } else {
-                    err(
-                        line_no,
-                        format!("channel `{}`: `{c}` is not a number", names[n]),
-                    )
+        let width = t.names.len();
+        for (j, cell) in row.iter().enumerate().take(width) {
+            match cell_value(&t.names[j], unquote(cell)) {
+                Ok(v) => t.columns[j].push(v),
+                Err(m) if strict => return Err(err(line_no, m)),
+                Err(m) => {
+                    t.columns[j].push(f64::NAN);
+                    t.bad[j].get_or_insert((line_no, m));
                 }
-            })?;
-            if !v.is_finite() {
-                return Err(err(
-                    line_no,
-                    format!(
-                        "channel `{}`: `{c}` is not finite (NaN or infinity)",
-                        names[n]
-                    ),
-                ));
             }
-            columns[n].push(v);
-            n += 1;
         }
-        if n != names.len() {
+        if row.len() > width || (strict && row.len() < width) {
+            let header = match t.header_line {
+                0 => "the first row".to_string(),
+                h => format!("the header (line {h})"),
+            };
             return Err(err(
                 line_no,
                 format!(
-                    "ragged row: {n} cells but the header (line {header_line}) has {} channels",
-                    names.len()
+                    "ragged row: {} cells but {header} has {width} channels",
+                    row.len()
                 ),
             ));
         }
-        row_lines.push(line_no);
+        for j in row.len()..width {
+            t.columns[j].push(f64::NAN);
+            let m = format!("channel `{}`: empty cell", t.names[j]);
+            t.bad[j].get_or_insert((line_no, m));
+        }
+        t.row_lines.push(line_no);
     }
-    if header_line == 0 {
+    if !have_names {
         return Err(err(
             last_line.max(1),
             "empty record: no header line and no samples".to_string(),
         ));
     }
-    if row_lines.is_empty() {
+    if t.row_lines.is_empty() {
         return Err(err(
-            header_line,
+            if t.header_line > 0 {
+                t.header_line
+            } else {
+                last_line.max(1)
+            },
             "empty record: a header but no samples".to_string(),
         ));
     }
-    Ok(CsvTable {
-        names,
-        columns,
-        header_line,
-        row_lines,
-    })
+    Ok(t)
 }
 
 pub(super) fn require_channels(

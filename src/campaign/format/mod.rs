@@ -203,12 +203,16 @@ fn refusal(file: &str, r: Refusal) -> CampaignError {
 }
 
 mod csv;
+pub mod layout;
 mod toml_file;
+mod toml_layout;
 mod write;
 
 use csv::*;
 
-pub use toml_file::parse_campaign_toml;
+use layout::merge_columns;
+pub use layout::{ColumnEntry, ColumnMap, Delimiter, ReadOptions, ReadOverride, ReadPlan};
+pub use toml_file::{parse_campaign_toml, parse_campaign_toml_planned};
 pub use write::*;
 
 /// Read one record, checking every rule of the format page against `sample_rate_hz`.
@@ -226,11 +230,26 @@ pub fn read_record_str(
     sample_rate_hz: f64,
     rate_source: &str,
 ) -> Result<Record, CampaignError> {
-    let table = parse_csv(text, file)?;
+    let table = parse_csv(text, file, &ReadOptions::default(), true)?;
     require_channels(&table, &REQUIRED_CHANNELS, file)?;
     let time = &table.columns[table.index("time_s").unwrap_or(0)];
     check_time(&table, time, Some(sample_rate_hz), rate_source, file)?;
     Ok(record_from_table(table))
+}
+
+/// One test's text read under its [`ReadPlan`]: the project's form as
+/// [`read_record_str`], a laboratory's form mapped ([`layout`]).
+pub fn read_record_planned(
+    text: &str,
+    file: &str,
+    plan: &ReadPlan,
+    rate_source: &str,
+) -> Result<Record, CampaignError> {
+    if !plan.lab_form {
+        return read_record_str(text, file, plan.sample_rate_hz, rate_source);
+    }
+    let table = parse_csv(text, file, &plan.read, false)?;
+    layout::record_from_lab_table(table, plan, file, rate_source)
 }
 
 /// The reference channels of a record: what `shaketable simulate` needs.
@@ -268,7 +287,7 @@ pub fn read_reference(
 ) -> Result<ReferenceRecord, CampaignError> {
     let file = display(path);
     let text = read_text(path, false)?;
-    let mut table = parse_csv(&text, &file)?;
+    let mut table = parse_csv(&text, &file, &ReadOptions::default(), true)?;
     require_channels(&table, &REFERENCE_CHANNELS, &file)?;
     let time = table.take("time_s").unwrap_or_default();
     let fs = check_time(
@@ -338,6 +357,7 @@ fn locate_test_files(
     dir: &Path,
     info: &CampaignInfo,
     file_lines: &[usize],
+    plans: &[ReadPlan],
     toml_file: &str,
 ) -> Result<Vec<PathBuf>, CampaignError> {
     use std::os::unix::fs::MetadataExt;
@@ -382,7 +402,9 @@ fn locate_test_files(
                 "{shown} is campaign.toml itself, not a record"
             )));
         }
-        if let Some(&(_, j)) = seen.iter().find(|(s, _)| *s == id) {
+        // a laboratory's file may hold several tests, each read from its own columns
+        let same_source = |j: usize| !plans[i].lab_form || plans[j].columns == plans[i].columns;
+        if let Some(&(_, j)) = seen.iter().find(|(s, j)| *s == id && same_source(*j)) {
             return Err(err(format!(
                 "{shown} is the same file as `{}` of test `{}` (line {}): one file per test",
                 info.tests[j].file, info.tests[j].name, file_lines[j]
@@ -398,17 +420,17 @@ fn locate_test_files(
 pub fn read_campaign(dir: &Path) -> Result<Campaign, CampaignError> {
     let root = campaign_root(dir)?;
     let (text, toml_file) = read_toml_text(&root, dir)?;
-    let (info, file_lines) = parse_campaign_toml(&text, &toml_file, &dir_name(dir))?;
-    let real = locate_test_files(&root, dir, &info, &file_lines, &toml_file)?;
-    let fs = info.sample_rate_hz;
+    let (info, file_lines, plans) = parse_campaign_toml_planned(&text, &toml_file, &dir_name(dir))?;
+    let real = locate_test_files(&root, dir, &info, &file_lines, &plans, &toml_file)?;
     let results: Vec<Result<Record, CampaignError>> = info
         .tests
         .par_iter()
         .zip(real.par_iter())
-        .map(|(spec, real)| {
+        .zip(plans.par_iter())
+        .map(|((spec, real), plan)| {
             let shown = display(&dir.join(&spec.file));
             let csv = read_text(real, false).map_err(|e| rename_file(e, &shown))?;
-            read_record_str(&csv, &shown, fs, &toml_file)
+            read_record_planned(&csv, &shown, plan, &toml_file)
         })
         .collect();
     let mut records = Vec::with_capacity(results.len());

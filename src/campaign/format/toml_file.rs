@@ -12,6 +12,8 @@ pub(super) struct RawDoc {
     geometry: Option<Spanned<RawTable>>,
     controller: Option<Spanned<RawTable>>,
     test: Option<Spanned<Vec<Spanned<RawTable>>>>,
+    read: Option<Spanned<toml::Value>>,
+    columns: Option<Spanned<toml::Value>>,
 }
 
 /// Line numbers from byte offsets.
@@ -21,7 +23,7 @@ pub(super) struct Lines<'a> {
 }
 
 impl Lines<'_> {
-    fn line(&self, offset: usize) -> usize {
+    pub(super) fn line(&self, offset: usize) -> usize {
         let end = offset.min(self.text.len());
         self.text.as_bytes()[..end]
             .iter()
@@ -30,7 +32,7 @@ impl Lines<'_> {
             + 1
     }
 
-    fn err(
+    pub(super) fn err(
         &self,
         offset: Option<usize>,
         test: Option<&str>,
@@ -571,6 +573,15 @@ pub fn parse_campaign_toml(
     file: &str,
     default_name: &str,
 ) -> Result<(CampaignInfo, Vec<usize>), CampaignError> {
+    parse_campaign_toml_planned(text, file, default_name).map(|(info, lines, _)| (info, lines))
+}
+
+/// [`parse_campaign_toml`] with each test's [`ReadPlan`]: how its file is read.
+pub fn parse_campaign_toml_planned(
+    text: &str,
+    file: &str,
+    default_name: &str,
+) -> Result<(CampaignInfo, Vec<usize>, Vec<ReadPlan>), CampaignError> {
     // classic Mac line ends (a lone CR) read as line ends; offsets are unchanged
     let text = lone_cr_to_lf(text);
     let text: &str = &text;
@@ -670,12 +681,35 @@ pub fn parse_campaign_toml(
             ))
         }
     };
+    let campaign_read = match &doc.read {
+        Some(v) => toml_layout::read_options(&lines, v.span().start, None, v.get_ref())?,
+        None => ReadOverride::default(),
+    };
+    let campaign_columns = match &doc.columns {
+        Some(v) => toml_layout::columns(&lines, v.span().start, None, v.get_ref())?,
+        None => BTreeMap::new(),
+    };
+    let lab_form = doc.read.is_some()
+        || doc.columns.is_some()
+        || raw_tests.get_ref().iter().any(|t| {
+            lookup(t.get_ref(), "read").is_some() || lookup(t.get_ref(), "columns").is_some()
+        });
     let mut tests: Vec<TestSpec> = Vec::new();
+    let mut plans: Vec<ReadPlan> = Vec::new();
     let mut file_lines = Vec::new();
     let mut header_lines: Vec<usize> = Vec::new();
     for (i, raw) in raw_tests.get_ref().iter().enumerate() {
         let (spec, file_off) = read_test(&lines, raw, i, sample_rate_hz)?;
         let here = lines.line(raw.span().start);
+        let mut plan = test_plan(
+            &lines,
+            raw,
+            &spec,
+            sample_rate_hz,
+            &campaign_read,
+            &campaign_columns,
+        )?;
+        plan.lab_form = lab_form;
         if let Some(j) = tests.iter().position(|t| t.name == spec.name) {
             return Err(lines.err(
                 Some(raw.span().start),
@@ -687,18 +721,30 @@ pub fn parse_campaign_toml(
                 ),
             ));
         }
-        let same = |t: &TestSpec| normalise_relative(&t.file) == normalise_relative(&spec.file);
-        if let Some(j) = tests.iter().position(same) {
+        // one file may hold several tests in a laboratory's form, each with its columns
+        let same = |j: &usize| {
+            normalise_relative(&tests[*j].file) == normalise_relative(&spec.file)
+                && (!lab_form || plans[*j].columns == plan.columns)
+        };
+        if let Some(j) = (0..tests.len()).find(same) {
             return Err(lines.err(
                 Some(file_off),
                 Some(&spec.name),
                 Some("file"),
                 format!(
-                    "`{}` is already the file of test `{}` (line {})",
-                    spec.file, tests[j].name, file_lines[j]
+                    "`{}` is already the file of test `{}` (line {}){}",
+                    spec.file,
+                    tests[j].name,
+                    file_lines[j],
+                    if lab_form {
+                        " with the same columns"
+                    } else {
+                        ""
+                    }
                 ),
             ));
         }
+        plans.push(plan);
         header_lines.push(here);
         file_lines.push(lines.line(file_off));
         tests.push(spec);
@@ -712,5 +758,54 @@ pub fn parse_campaign_toml(
             tests,
         },
         file_lines,
+        plans,
     ))
+}
+
+/// How test `spec`'s file is read: `[read]` and `[columns]` with the test's overrides.
+fn test_plan(
+    lines: &Lines,
+    raw: &Spanned<RawTable>,
+    spec: &TestSpec,
+    sample_rate_hz: f64,
+    campaign_read: &ReadOverride,
+    campaign_columns: &BTreeMap<String, ColumnEntry>,
+) -> Result<ReadPlan, CampaignError> {
+    let t = raw.get_ref();
+    let name = Some(spec.name.as_str());
+    let test_read = match lookup(t, "read") {
+        Some(v) => toml_layout::read_options(lines, v.span().start, name, v.get_ref())?,
+        None => ReadOverride::default(),
+    };
+    let (test_columns, columns_off) = match lookup(t, "columns") {
+        Some(v) => (
+            toml_layout::columns(lines, v.span().start, name, v.get_ref())?,
+            v.span().start,
+        ),
+        None => (BTreeMap::new(), raw.span().start),
+    };
+    if let Some(v) = lookup(t, "sample_rate_hz") {
+        let fs = number(lines, v, name, "sample_rate_hz", SAMPLE_RATE_HZ)?;
+        if fs != sample_rate_hz {
+            return Err(lines.err(
+                Some(v.span().start),
+                name,
+                Some("sample_rate_hz"),
+                format!(
+                    "{fs} Hz differs from the campaign's {sample_rate_hz} Hz: this version identifies tests of one sample rate together; put tests of another rate in a campaign of their own"
+                ),
+            ));
+        }
+    }
+    let columns = merge_columns(campaign_columns, &test_columns)
+        .map_err(|m| lines.err(Some(columns_off), name, Some("columns"), m))?;
+    Ok(ReadPlan {
+        read: ReadOptions::default()
+            .merged(campaign_read)
+            .merged(&test_read),
+        columns,
+        lab_form: false,
+        sample_rate_hz,
+        control: spec.control,
+    })
 }

@@ -1,0 +1,288 @@
+//! A laboratory's recordings read in place (campaign-format.md, "Recordings as
+//! laboratories make them"): a synthesised campaign rewritten the way a data-acquisition
+//! program exports it (a preamble, a header on line 7, `;` separators, a date column, an
+//! event column that only the first row fills, millimetres, kilonewtons with the
+//! opposite sign, g, no time column, one reference channel) reads back as the same
+//! campaign through `[read]` and `[columns]`, and identifies the same table.
+
+use shaketable::campaign::format::{read_campaign, write_campaign};
+use shaketable::campaign::synth::{synthesise, SynthOptions};
+use shaketable::campaign::{Campaign, Control, Record};
+use shaketable::identify::identify;
+use shaketable::Params;
+use std::fmt::Write as _;
+use std::path::Path;
+
+const G: f64 = 9.80665;
+
+fn small_campaign() -> Campaign {
+    let opts = SynthOptions {
+        seed: 5,
+        random_duration_s: 12.0,
+        ..SynthOptions::default()
+    };
+    synthesise(&Params::trees_lab(), &opts, None)
+}
+
+/// `r` as the DAQ exports it; `force_sign` is the lab's sign convention.
+fn lab_text(r: &Record, control: Control, force_sign: f64) -> String {
+    let mut s = String::from(
+        "Header Size:  7\nVersion:  2\nSampling Interval:  0.001953125\nSampling Rate:  512\n",
+    );
+    let _ = writeln!(s, "Sample Count:  {}\nDevice Serial Number:  0", r.len());
+    let reference = match control {
+        Control::Displacement => "Ref_mm",
+        Control::Acceleration => "Ref_g",
+    };
+    let _ = writeln!(
+        s,
+        "Sample Number; Date/Time; LVDT; Load; Accel; {reference}; Valve; Spool; Events"
+    );
+    for k in 0..r.len() {
+        let reference = match control {
+            Control::Displacement => r.ref_displacement_m[k] * 1000.0,
+            Control::Acceleration => r.ref_acceleration_m_s2[k] / G,
+        };
+        let _ = write!(
+            s,
+            "{}; 06/29/2022 04:05:36.674 PM; {:e}; {:e}; {:e}; {:e}; {:e}; {:e}",
+            k + 1,
+            r.displacement_m[k] * 1000.0,
+            force_sign * r.force_n[k] / 1000.0,
+            r.acceleration_m_s2[k] / G,
+            reference,
+            r.valve_command[k],
+            r.spool_position.as_ref().unwrap()[k],
+        );
+        s.push_str(if k == 0 { "; DAQ Start\n" } else { "\n" });
+    }
+    s
+}
+
+const LAB_TOML: &str = r#"
+[read]
+delimiter = ";"
+header_line = 7
+
+[columns]
+displacement_m = { column = "LVDT", scale = 0.001 }
+force_n = { column = "Load", scale = -1000.0 }
+acceleration_m_s2 = { column = "Accel", scale = 9.80665 }
+ref_displacement_m = { column = "Ref_mm", scale = 0.001 }
+valve_command = "Valve"
+spool_position = "Spool"
+"#;
+
+/// The campaign written in the lab's form into `dir`: campaign.toml from the original
+/// with `[read]`/`[columns]`, files `.txt`; test R3 records force with the project's
+/// sign and says so in its own `columns` override.
+fn write_lab_campaign(c: &Campaign, dir: &Path) {
+    write_campaign(c, dir).unwrap();
+    let mut toml = std::fs::read_to_string(dir.join("campaign.toml")).unwrap();
+    for (spec, r) in c.info.tests.iter().zip(&c.records) {
+        std::fs::remove_file(dir.join(&spec.file)).unwrap();
+        let sign = if spec.name == "R3" { 1.0 } else { -1.0 };
+        let txt = format!("{}.txt", spec.name);
+        std::fs::write(dir.join(&txt), lab_text(r, spec.control, sign)).unwrap();
+        toml = toml.replace(
+            &format!("file = \"{}\"", spec.file),
+            &format!("file = \"{txt}\""),
+        );
+    }
+    // acceleration-controlled tests recorded their reference in g, not in mm
+    let accel_ref = "ref_displacement_m = false, ref_acceleration_m_s2 = { column = \"Ref_g\", scale = 9.80665 }";
+    toml = toml.replace(
+        "name = \"R2\"\n",
+        &format!("name = \"R2\"\ncolumns = {{ {accel_ref} }}\n"),
+    );
+    toml = toml.replace(
+        "name = \"R3\"\n",
+        &format!("name = \"R3\"\ncolumns = {{ {accel_ref}, force_n = {{ scale = 1000.0 }} }}\n"),
+    );
+    toml.push_str(LAB_TOML);
+    std::fs::write(dir.join("campaign.toml"), toml).unwrap();
+}
+
+fn rms(x: &[f64]) -> f64 {
+    (x.iter().map(|v| v * v).sum::<f64>() / x.len() as f64).sqrt()
+}
+
+/// RMS of `a - b` over RMS of `b`.
+fn rel_rms(a: &[f64], b: &[f64]) -> f64 {
+    let d: Vec<f64> = a.iter().zip(b).map(|(x, y)| x - y).collect();
+    rms(&d) / rms(b).max(1e-300)
+}
+
+#[test]
+fn a_lab_export_reads_back_as_the_campaign_it_came_from() {
+    let c = small_campaign();
+    let tmp = tempfile::tempdir().unwrap();
+    let dir = tmp.path().join("lab");
+    write_lab_campaign(&c, &dir);
+    let lab = read_campaign(&dir).unwrap();
+    assert_eq!(lab.records.len(), c.records.len());
+    for ((spec, a), b) in c.info.tests.iter().zip(&lab.records).zip(&c.records) {
+        let n = &spec.name;
+        assert_eq!(a.len(), b.len(), "{n}");
+        for k in 0..a.len() {
+            assert!((a.time_s[k] - b.time_s[k]).abs() < 1e-9, "{n} time {k}");
+        }
+        // scaled channels: the text keeps 17 digits, the scale costs an ulp or two
+        for (what, x, y) in [
+            ("displacement", &a.displacement_m, &b.displacement_m),
+            ("force", &a.force_n, &b.force_n),
+            ("acceleration", &a.acceleration_m_s2, &b.acceleration_m_s2),
+        ] {
+            assert!(rel_rms(x, y) < 1e-12, "{n} {what}: {}", rel_rms(x, y));
+        }
+        assert_eq!(a.valve_command, b.valve_command, "{n}");
+        // the derivatives computed from a recorded displacement reference match the
+        // synthesised exact ones (band-limited, at rest at both ends); integrals of a
+        // recorded acceleration reference are fixed up to their lowest frequencies only
+        // (no record tells a displacement's drift), so the displacement is looser
+        let (x, v, acc) = (
+            rel_rms(&a.ref_displacement_m, &b.ref_displacement_m),
+            rel_rms(&a.ref_velocity_m_s, &b.ref_velocity_m_s),
+            rel_rms(&a.ref_acceleration_m_s2, &b.ref_acceleration_m_s2),
+        );
+        let shown = format!("{n}: reference x {x:.2e}, v {v:.2e}, a {acc:.2e}");
+        match spec.control {
+            Control::Displacement => assert!(x < 1e-12 && v < 1e-5 && acc < 1e-3, "{shown}"),
+            Control::Acceleration => assert!(acc < 1e-12 && v < 2e-2 && x < 0.3, "{shown}"),
+        }
+        eprintln!("{shown}");
+        // Sample Number is kept; the date and the event note are text and dropped
+        let extras: Vec<&str> = a.extra.iter().map(|(n, _)| n.as_str()).collect();
+        assert_eq!(extras, ["Sample Number"], "{n}");
+    }
+}
+
+#[test]
+fn a_lab_export_identifies_the_same_table() {
+    let c = small_campaign();
+    let tmp = tempfile::tempdir().unwrap();
+    let dir = tmp.path().join("lab");
+    write_lab_campaign(&c, &dir);
+    let lab = read_campaign(&dir).unwrap();
+    let (a, b) = (identify(&lab), identify(&c));
+    let (ma, mb) = (a.mass_kg.unwrap(), b.mass_kg.unwrap());
+    assert!((ma / mb - 1.0).abs() < 2e-3, "mass {ma} vs {mb}");
+    let (ka, kb) = (
+        a.params.actuator.bulk_modulus_pa,
+        b.params.actuator.bulk_modulus_pa,
+    );
+    assert!((ka / kb - 1.0).abs() < 2e-2, "bulk modulus {ka} vs {kb}");
+}
+
+/// A one-test lab campaign (R1's first 200 samples) with `toml_extra` appended to its
+/// campaign.toml and `edit` applied to its text; the error of reading it.
+fn lab_error(toml_extra: &str, edit: impl Fn(String) -> String) -> String {
+    let mut c = small_campaign();
+    c.info.tests.truncate(1);
+    c.records.truncate(1);
+    let r = &mut c.records[0];
+    let keep = 200;
+    for ch in [
+        &mut r.time_s,
+        &mut r.ref_displacement_m,
+        &mut r.ref_velocity_m_s,
+        &mut r.ref_acceleration_m_s2,
+        &mut r.valve_command,
+        &mut r.displacement_m,
+        &mut r.acceleration_m_s2,
+        &mut r.force_n,
+    ] {
+        ch.truncate(keep);
+    }
+    r.spool_position.as_mut().unwrap().truncate(keep);
+    r.extra.clear();
+    let tmp = tempfile::tempdir().unwrap();
+    let dir = tmp.path().join("lab");
+    write_lab_campaign(&c, &dir);
+    let txt = dir.join("R1.txt");
+    let text = std::fs::read_to_string(&txt).unwrap();
+    std::fs::write(&txt, edit(text)).unwrap();
+    let toml = std::fs::read_to_string(dir.join("campaign.toml")).unwrap();
+    std::fs::write(dir.join("campaign.toml"), toml + toml_extra).unwrap();
+    match read_campaign(&dir) {
+        Ok(_) => String::new(),
+        Err(e) => e.to_string(),
+    }
+}
+
+#[test]
+fn lab_form_mistakes_are_named() {
+    let same = |t: String| t;
+    assert_eq!(lab_error("", same), "", "the unedited campaign reads");
+    let e = lab_error("", |t| t.replace("; Load;", "; Force;"));
+    assert!(
+        e.contains("column `Load` (mapped to `force_n`) not found") && e.contains("Force"),
+        "{e}"
+    );
+    assert!(e.contains("R1.txt: line 7"), "{e}");
+    let e = lab_error("", |t| t.replacen("; DAQ Start", "; DAQ Start; extra", 1));
+    assert!(
+        e.contains("line 8: ragged row: 10 cells but the header (line 7) has 9"),
+        "{e}"
+    );
+    // a text cell in a used column names its line; in an unused one it is no error
+    let e = lab_error("", |t| {
+        let mut lines: Vec<String> = t.lines().map(str::to_string).collect();
+        lines[20] = lines[20].replacen("; 06/29", "; n/a; 06/29", 1);
+        lines[20] = lines[20].replacen("; n/a; 06/29/2022 04:05:36.674 PM", "; 06/29/2022; n/a", 1);
+        lines.join("\n") + "\n"
+    });
+    assert!(
+        e.contains("line 21: channel `LVDT`: `n/a` is not a number (mapped to `displacement_m`)"),
+        "{e}"
+    );
+    let e = lab_error("", |t| t.replace("06/29/2022", "yesterday"));
+    assert_eq!(e, "", "a date column nobody maps may hold anything");
+}
+
+#[test]
+fn lab_form_keys_are_checked() {
+    // the appended keys go into the last table of the file, `[columns]`
+    let toml_with = |extra: &str| lab_error(extra, |t| t);
+    let e = toml_with("pressure_a_pa = { column = \"Valve\", scale = 0.0 }\n");
+    assert!(
+        e.contains("columns.pressure_a_pa.scale") && e.contains("scale of 0"),
+        "{e}"
+    );
+    let e = toml_with("pressure_a_pa = { column = \"Spool\", scal = 2.0 }\n");
+    assert!(
+        e.contains("columns.pressure_a_pa.scal") && e.contains("unknown key"),
+        "{e}"
+    );
+    let e = toml_with("pressure_a_pa = { column = \"Valve\", offset = nan }\n");
+    assert!(e.contains("not a finite number"), "{e}");
+    // a further channel mapped from a column is kept under the channel's name
+    assert_eq!(
+        toml_with("pressure_a_pa = { column = \"Valve\", scale = 2.0 }\n"),
+        ""
+    );
+    let e = toml_with("[read]\nheader_lines = 7\n");
+    assert!(e.contains("not valid TOML"), "a second [read] table: {e}");
+}
+
+#[test]
+fn read_keys_are_checked() {
+    let dir = tempfile::tempdir().unwrap();
+    let c = small_campaign();
+    write_lab_campaign(&c, dir.path());
+    let toml = std::fs::read_to_string(dir.path().join("campaign.toml")).unwrap();
+    for (from, to, expect) in [
+        ("header_line = 7", "header_lines = 7", "read.header_lines"),
+        ("header_line = 7", "header_line = -1", "read.header_line"),
+        (
+            "delimiter = \";\"",
+            "delimiter = \"semicolon\"",
+            "not a delimiter",
+        ),
+        ("delimiter = \";\"", "delimiter = \",\"", "not found"),
+    ] {
+        std::fs::write(dir.path().join("campaign.toml"), toml.replace(from, to)).unwrap();
+        let e = read_campaign(dir.path()).unwrap_err().to_string();
+        assert!(e.contains(expect), "{to}: {e}");
+    }
+}
