@@ -286,3 +286,39 @@ fn read_keys_are_checked() {
         assert!(e.contains(expect), "{to}: {e}");
     }
 }
+
+/// `campaign init` on a lab export describes every file (columns, sample values, the
+/// rate from the preamble) in a campaign.toml that is valid TOML, and never overwrites.
+#[test]
+fn campaign_init_describes_a_lab_export_and_never_overwrites() {
+    let c = small_campaign();
+    let tmp = tempfile::tempdir().unwrap();
+    let dir = tmp.path().join("lab");
+    write_lab_campaign(&c, &dir);
+    std::fs::remove_file(dir.join("campaign.toml")).unwrap();
+    std::fs::write(dir.join("notes.md"), "# what we did on Tuesday\n").unwrap();
+    let bin = env!("CARGO_BIN_EXE_shaketable");
+    let run = || {
+        std::process::Command::new(bin)
+            .args(["campaign", "init", dir.to_str().unwrap()])
+            .output()
+            .unwrap()
+    };
+    let o = run();
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let text = std::fs::read_to_string(dir.join("campaign.toml")).unwrap();
+    let v: toml::Table = toml::from_str(&text).unwrap();
+    assert_eq!(v["sample_rate_hz"].as_float(), Some(512.0));
+    assert_eq!(v["read"]["delimiter"].as_str(), Some(";"));
+    assert_eq!(v["read"]["header_line"].as_integer(), Some(7));
+    assert_eq!(v["test"].as_array().unwrap().len(), c.records.len());
+    assert!(text.contains("\"LVDT\": "), "{text}");
+    assert!(text.contains("# skipped notes.md"), "{text}");
+    let o = run();
+    assert!(!o.status.success());
+    assert!(String::from_utf8_lossy(&o.stderr).contains("never overwrites"));
+    assert_eq!(
+        std::fs::read_to_string(dir.join("campaign.toml")).unwrap(),
+        text
+    );
+}

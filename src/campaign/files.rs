@@ -125,6 +125,28 @@ pub fn read_regular(path: &Path, limit: u64, what: &'static str) -> Result<Vec<u
     Ok(bytes)
 }
 
+/// The first `max_bytes` of a regular file (any size): the same checks as
+/// [`read_regular`], for looking into a file without reading all of it.
+pub fn read_head(path: &Path, max_bytes: u64) -> Result<Vec<u8>, Refusal> {
+    let real = path.canonicalize().map_err(Refusal::Io)?;
+    check_meta(
+        &std::fs::metadata(&real).map_err(Refusal::Io)?,
+        u64::MAX,
+        "",
+    )?;
+    let file = std::fs::OpenOptions::new()
+        .read(true)
+        .custom_flags(libc::O_NONBLOCK | libc::O_NOFOLLOW)
+        .open(&real)
+        .map_err(Refusal::Io)?;
+    check_meta(&file.metadata().map_err(Refusal::Io)?, u64::MAX, "")?;
+    let mut bytes = Vec::new();
+    file.take(max_bytes)
+        .read_to_end(&mut bytes)
+        .map_err(Refusal::Io)?;
+    Ok(bytes)
+}
+
 /// `file` relative to the campaign folder with `.` and `..` resolved lexically, or `None`
 /// when it is absolute or climbs out of the folder. Used before any file system access,
 /// and to compare test files (`./R1.csv` is `R1.csv`).

@@ -23,6 +23,9 @@ enum Command {
     Synth(SynthArgs),
     /// Read a campaign, check every rule of the format, and summarise it.
     Check(CheckArgs),
+    /// Write a campaign.toml skeleton for a folder of a laboratory's recordings: every
+    /// file, its columns with sample values, a guessed sample rate (never overwrites).
+    Init(crate::campaign_init::InitArgs),
 }
 
 #[derive(clap::Args)]
@@ -81,6 +84,7 @@ pub fn run(args: Args) -> anyhow::Result<()> {
     match args.command {
         Command::Synth(a) => run_synth(a),
         Command::Check(a) => run_check(a),
+        Command::Init(a) => crate::campaign_init::run_init(a),
     }
 }
 

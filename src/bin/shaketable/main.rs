@@ -3,6 +3,7 @@
 
 mod bench;
 mod campaign;
+mod campaign_init;
 mod diagnose;
 mod fmu;
 mod frf;
