@@ -322,3 +322,100 @@ fn campaign_init_describes_a_lab_export_and_never_overwrites() {
         text
     );
 }
+
+fn shaketable(args: &[&str]) -> std::process::Output {
+    std::process::Command::new(env!("CARGO_BIN_EXE_shaketable"))
+        .args(args)
+        .output()
+        .unwrap()
+}
+
+fn column(csv: &Path, name: &str) -> Vec<f64> {
+    let text = std::fs::read_to_string(csv).unwrap();
+    let mut lines = text.lines();
+    let j = lines
+        .next()
+        .unwrap()
+        .split(',')
+        .position(|h| h == name)
+        .unwrap();
+    lines
+        .map(|l| l.split(',').nth(j).unwrap().parse().unwrap())
+        .collect()
+}
+
+/// `simulate --campaign DIR --test NAME`: in the project's form it is the same run as
+/// `--reference DIR/R1.csv` byte for byte; in a laboratory's form (a recorded
+/// displacement reference only, in mm) it simulates the same motion.
+#[test]
+fn simulate_one_test_of_a_campaign() {
+    let c = small_campaign();
+    let tmp = tempfile::tempdir().unwrap();
+    let (own, lab) = (tmp.path().join("own"), tmp.path().join("lab"));
+    write_campaign(&c, &own).unwrap();
+    write_lab_campaign(&c, &lab);
+    let s = |p: &Path| p.to_str().unwrap().to_string();
+    let out = |n: &str| tmp.path().join(n);
+    for (args, file) in [
+        (
+            vec![
+                "--campaign".to_string(),
+                s(&own),
+                "--test".into(),
+                "S3".into(),
+            ],
+            "by_test.csv",
+        ),
+        (
+            vec!["--reference".to_string(), s(&own.join("S3.csv"))],
+            "by_file.csv",
+        ),
+        (
+            vec![
+                "--campaign".to_string(),
+                s(&lab),
+                "--test".into(),
+                "S3".into(),
+            ],
+            "lab.csv",
+        ),
+    ] {
+        let mut all = vec!["simulate".to_string(), "--out".into(), s(&out(file))];
+        all.extend(args);
+        let refs: Vec<&str> = all.iter().map(String::as_str).collect();
+        let o = shaketable(&refs);
+        assert!(
+            o.status.success(),
+            "{file}: {}",
+            String::from_utf8_lossy(&o.stderr)
+        );
+    }
+    let (a, b) = (
+        std::fs::read(out("by_test.csv")).unwrap(),
+        std::fs::read(out("by_file.csv")).unwrap(),
+    );
+    assert!(a == b, "--test and --reference differ");
+    let (x_lab, x_own) = (
+        column(&out("lab.csv"), "displacement_m"),
+        column(&out("by_file.csv"), "displacement_m"),
+    );
+    assert!(
+        rel_rms(&x_lab, &x_own) < 1e-4,
+        "{}",
+        rel_rms(&x_lab, &x_own)
+    );
+    let o = shaketable(&[
+        "simulate",
+        "--campaign",
+        &s(&own),
+        "--test",
+        "W9",
+        "--out",
+        &s(&out("x.csv")),
+    ]);
+    let e = String::from_utf8_lossy(&o.stderr);
+    assert!(
+        !o.status.success() && e.contains("no such test") && e.contains("R1, R2"),
+        "{e}"
+    );
+}

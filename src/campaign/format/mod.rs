@@ -444,6 +444,32 @@ pub fn read_campaign(dir: &Path) -> Result<Campaign, CampaignError> {
     })
 }
 
+/// One test of a campaign, by name: the campaign's description and the test's record,
+/// read under its plan (every test file is located and checked; only this one is read).
+pub fn read_campaign_test(dir: &Path, name: &str) -> Result<(CampaignInfo, Record), CampaignError> {
+    let root = campaign_root(dir)?;
+    let (text, toml_file) = read_toml_text(&root, dir)?;
+    let (info, file_lines, plans) = parse_campaign_toml_planned(&text, &toml_file, &dir_name(dir))?;
+    let Some(i) = info.tests.iter().position(|t| t.name == name) else {
+        let names: Vec<&str> = info.tests.iter().map(|t| t.name.as_str()).collect();
+        return Err(CampaignError::Toml {
+            file: toml_file,
+            line: None,
+            test: Some(name.to_string()),
+            key: None,
+            message: format!(
+                "no such test; the campaign's tests are {}",
+                names.join(", ")
+            ),
+        });
+    };
+    let real = locate_test_files(&root, dir, &info, &file_lines, &plans, &toml_file)?;
+    let shown = display(&dir.join(&info.tests[i].file));
+    let text = read_text(&real[i], false).map_err(|e| rename_file(e, &shown))?;
+    let record = read_record_planned(&text, &shown, &plans[i], &toml_file)?;
+    Ok((info, record))
+}
+
 /// The same error naming `file` (the path as campaign.toml gives it, not the resolved one).
 fn rename_file(e: CampaignError, file: &str) -> CampaignError {
     let mut e = e;
