@@ -5,6 +5,9 @@
 # The cdylib is built in release and packaged with modelDescription.xml (generated from
 # the variable table), documentation/index.html and, with --params, resources/parameters.toml
 # (read by fmi2Instantiate, so the binary starts from the same values the XML declares).
+# The binary is linked against glibc 2.17 (manylinux2014's baseline) with cargo-zigbuild,
+# so it loads on RHEL 7/8, Ubuntu 18.04/20.04, Debian 9-11 and later, not only on the
+# machine that built it (scripts/setup.sh installs zig and cargo-zigbuild into .venv).
 set -euo pipefail
 ROOT="$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)"
 cd "$ROOT"
@@ -17,8 +20,22 @@ while [ $# -gt 0 ]; do
     *) echo "build_fmu.sh: unknown option $1 (use --params FILE, --out FILE)" >&2; exit 2 ;;
   esac
 done
-cargo build --release --locked --lib --bin shaketable
+cargo build --release --locked --bin shaketable
 BIN="$ROOT/target/release/shaketable"
+RUST_TARGET=x86_64-unknown-linux-gnu
+GLIBC_BASELINE=2.17
+export PATH="$ROOT/.venv/bin:$PATH"
+if ! command -v cargo-zigbuild >/dev/null 2>&1; then
+  echo "build_fmu.sh: cargo-zigbuild not found: run scripts/setup.sh (it installs zig and cargo-zigbuild into .venv)" >&2
+  exit 2
+fi
+# bindgen (fmi-sys' build script) runs on this machine and needs its C headers, which
+# zig's compiler wrapper hides from it
+CLANG_INCLUDE="$(ls -d /usr/lib/llvm-*/lib/clang/*/include 2>/dev/null | sort -V | tail -1)"
+MULTIARCH="$(gcc -print-multiarch 2>/dev/null || echo x86_64-linux-gnu)"
+BINDGEN_EXTRA_CLANG_ARGS="-I$CLANG_INCLUDE -I/usr/include/$MULTIARCH -I/usr/include" \
+  cargo zigbuild --release --locked --lib --target "$RUST_TARGET.$GLIBC_BASELINE"
+SO="$ROOT/target/$RUST_TARGET/release/libshaketable.so"
 mkdir -p "$(dirname "$OUT")"
 OUT="$(cd "$(dirname "$OUT")" && pwd)/$(basename "$OUT")"
 STAGE="$(dirname "$OUT")/.stage-$(basename "$OUT" .fmu)-$$"
@@ -32,7 +49,7 @@ if [ -n "$PARAMS" ]; then
 fi
 "$BIN" fmu description "${ARGS[@]}" > "$STAGE/modelDescription.xml"
 "$BIN" fmu documentation "${ARGS[@]}" > "$STAGE/documentation/index.html"
-cp "$ROOT/target/release/libshaketable.so" "$STAGE/binaries/linux64/ShakeTable.so"
+cp "$SO" "$STAGE/binaries/linux64/ShakeTable.so"
 python3 - "$STAGE" "$OUT" <<'PY'
 import os, sys, zipfile
 stage, out = sys.argv[1], sys.argv[2]

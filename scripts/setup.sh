@@ -6,8 +6,9 @@ set -euo pipefail
 ROOT="$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)"
 
 # libclang-dev: fmi-sys builds its FMI 2.0 bindings with bindgen.
+# binutils: readelf/nm, with which the tests read the FMU binary's symbols.
 # libfontconfig1-dev, libfreetype-dev, pkg-config, fonts-dejavu-core: plotters draws text.
-DEB_PACKAGES=(libclang-dev libfontconfig1-dev libfreetype-dev pkg-config fonts-dejavu-core)
+DEB_PACKAGES=(libclang-dev binutils libfontconfig1-dev libfreetype-dev pkg-config fonts-dejavu-core)
 missing=()
 for p in "${DEB_PACKAGES[@]}"; do
   dpkg -s "$p" >/dev/null 2>&1 || missing+=("$p")
