@@ -6,6 +6,7 @@
 
 pub mod files;
 pub mod format;
+pub mod matlab;
 pub mod screen;
 pub mod synth;
 
