@@ -51,6 +51,18 @@ def dspace_recording():
     return {"rec": {"X": x, "Y": y, "Description": "shaketable fixture"}}
 
 
+def dspace_two_rasters():
+    """A recording with two time bases: X(1) at 1 kHz (100 samples), X(2) at 100 Hz (10);
+    Y(i).XIndex says which one each signal follows. Written uncompressed."""
+    x = np.zeros((1, 2), dtype=[("Name", "O"), ("Data", "O"), ("Unit", "O")])
+    x[0, 0] = ("Time", (np.arange(100) / 1000.0)[None, :], "s")
+    x[0, 1] = ("Time", (np.arange(10) / 100.0)[None, :], "s")
+    y = np.zeros((1, 2), dtype=[("Name", "O"), ("Path", "O"), ("Data", "O"), ("XIndex", "O")])
+    y[0, 0] = ("Fast", "Model Root", np.arange(100.0)[None, :], 1.0)
+    y[0, 1] = ("Slow", "Model Root", -np.arange(10.0)[None, :], 2.0)
+    return {"rasters": {"X": x, "Y": y}}
+
+
 def element(endian, mi_type, payload):
     """One data element, small format when it fits in 4 bytes, padded to 8 bytes."""
     if len(payload) <= 4 and mi_type != MI_MATRIX:
@@ -98,6 +110,7 @@ def main():
     scipy.io.savemat(OUT / "plain_z.mat", plain_variables(), do_compression=True)
     scipy.io.savemat(OUT / "v4.mat", {"accel": np.sin(0.1 * np.arange(10))}, format="4")
     scipy.io.savemat(OUT / "dspace.mat", dspace_recording(), do_compression=True)
+    scipy.io.savemat(OUT / "dspace_rasters.mat", dspace_two_rasters())
     (OUT / "bigendian.mat").write_bytes(hand_written(">"))
     (OUT / "littleendian.mat").write_bytes(hand_written("<"))
     (OUT / "v73.mat").write_bytes(v73_stub())

@@ -18,6 +18,7 @@
 //! campaign `column` (see `signal.rs`); [`MatFile::signals`] lists what a file holds.
 
 mod arrays;
+mod dspace;
 mod header;
 mod parse;
 mod signal;

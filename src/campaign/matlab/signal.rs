@@ -1,13 +1,17 @@
 //! A campaign `column` resolved in a MAT-file, and the listing of every addressable signal.
 //!
 //! A `column` is, tried in this order:
-//! 1. a variable, or a field of a 1x1 struct as a dotted path (`accel`, `rec.X.Data`),
-//!    holding a vector;
+//! 1. a variable, or a struct field as a dotted path with 1-based element indices where
+//!    a struct is an array (`accel`, `rec.X.Data`, `rec.Y(2).Data`), holding a vector;
 //! 2. `name:k`, column `k` (1-based) of a matrix `name` (a vector is its own column 1);
 //! 3. a signal of a dSPACE ControlDesk recording (a 1x1 struct with `X` = time struct and
 //!    `Y` = struct array of signals with `Name`, `Path`, `Data`) by its `Name`, by its block
 //!    path `Path/Name`, or by `Path` alone when that already ends with the name.
+//!
+//! A recording's time is `rec.X.Data` (`rec.X(k).Data` when it has several time bases; a
+//! signal's own is `X(XIndex)` when `Y(i).XIndex` is given, else `X(1)`).
 
+use super::dspace::{dspace_info, dspace_times, is_recording, DspaceSignal};
 use super::{MatError, MatFile, MatValue};
 
 /// How many names an unknown-column error lists.
@@ -29,39 +33,16 @@ pub enum SignalKind {
     Variable,
     /// Column `k` of a matrix (`name:k`).
     MatrixColumn,
-    /// The time vector `X.Data` of dSPACE recording `recording`.
+    /// A time vector `X(k).Data` of dSPACE recording `recording`.
     DspaceTime { recording: String },
-    /// A signal `Y(i)` of a dSPACE recording: its block path (`Path/Name`) and `Unit`.
+    /// A signal `Y(i)` of a dSPACE recording: its block path (`Path/Name`), `Unit`, and
+    /// the column of its time vector.
     DspaceSignal {
         recording: String,
         path: String,
         unit: Option<String>,
+        time: String,
     },
-}
-
-/// One element of a dSPACE recording's `Y`.
-struct DspaceSignal<'a> {
-    recording: &'a str,
-    name: &'a str,
-    path: &'a str,
-    unit: Option<&'a str>,
-    data: &'a MatValue,
-}
-
-impl DspaceSignal<'_> {
-    /// `Path/Name`, or the name alone when `Path` is empty.
-    fn block_path(&self) -> String {
-        match self.path {
-            "" => self.name.to_string(),
-            p => format!("{p}/{}", self.name),
-        }
-    }
-
-    fn answers_to(&self, column: &str) -> bool {
-        column == self.name
-            || column == self.block_path()
-            || (!self.path.is_empty() && column == self.path)
-    }
 }
 
 impl MatFile {
@@ -83,29 +64,38 @@ impl MatFile {
         let dspace = self.dspace_signals();
         let mut out = Vec::new();
         for (name, value) in &self.variables {
-            if let Some(time) = dspace_time(value) {
-                out.push(SignalInfo {
-                    column: format!("{name}.X.Data"),
-                    len: numel(time),
-                    kind: SignalKind::DspaceTime {
-                        recording: name.clone(),
-                    },
-                });
-                for s in dspace.iter().filter(|s| s.recording == name) {
-                    out.push(dspace_info(s, &dspace));
-                }
-            } else {
+            let times = dspace_times(name, value);
+            if times.is_empty() {
                 list_value(name, value, 0, &mut out);
+                continue;
+            }
+            for (column, time) in times {
+                let recording = name.clone();
+                let kind = SignalKind::DspaceTime { recording };
+                out.push(SignalInfo {
+                    column,
+                    len: numel(time),
+                    kind,
+                });
+            }
+            for s in dspace.iter().filter(|s| s.recording == name) {
+                out.push(dspace_info(s, &dspace));
             }
         }
         out
     }
 
-    /// A variable, or a field of 1x1 structs by dotted path.
+    /// A variable, or a struct field by dotted path (`rec.Y(2).Data`).
     fn lookup(&self, path: &str) -> Option<&MatValue> {
         let mut parts = path.split('.');
-        let first = self.variable(parts.next()?)?;
-        parts.try_fold(first, |value, field| value.field(field))
+        let (name, mut index) = split_index(parts.next()?)?;
+        let mut value = self.variable(name)?;
+        for part in parts {
+            let (field, next) = split_index(part)?;
+            value = struct_field(value, index, field)?;
+            index = next;
+        }
+        index.is_none().then_some(value)
     }
 
     fn not_a_signal(&self, column: &str, why: String) -> MatError {
@@ -130,7 +120,7 @@ impl MatFile {
                     dims[1]
                 )
             }
-            MatValue::Struct { .. } if dspace_time(value).is_some() => {
+            MatValue::Struct { .. } if is_recording(value) => {
                 format!(
                     "is a dSPACE recording; name one of its signals ({})",
                     self.listing()
@@ -238,65 +228,33 @@ impl MatFile {
         }
         names.join(", ")
     }
-
-    /// Every signal of every dSPACE recording, in file order.
-    fn dspace_signals(&self) -> Vec<DspaceSignal<'_>> {
-        let mut out = Vec::new();
-        for (recording, value) in &self.variables {
-            let Some(MatValue::Struct {
-                fields, elements, ..
-            }) = value.field("Y").filter(|_| dspace_time(value).is_some())
-            else {
-                continue;
-            };
-            for element in elements {
-                let field = |name: &str| {
-                    fields
-                        .iter()
-                        .position(|f| f == name)
-                        .and_then(|i| element.get(i))
-                };
-                let (Some(name), Some(data)) =
-                    (field("Name").and_then(MatValue::text), field("Data"))
-                else {
-                    continue;
-                };
-                let path = field("Path").and_then(MatValue::text).unwrap_or("");
-                let unit = field("Unit").and_then(MatValue::text);
-                out.push(DspaceSignal {
-                    recording,
-                    name,
-                    path,
-                    unit,
-                    data,
-                });
-            }
-        }
-        out
-    }
 }
 
-/// The time vector of a dSPACE recording: `X.Data` of a 1x1 struct that also has `Y`.
-fn dspace_time(value: &MatValue) -> Option<&MatValue> {
-    value.field("Y")?;
-    value.field("X")?.field("Data")
+/// Field `field` of element `index` (1-based; `None` for a 1x1 struct) of a struct.
+pub(super) fn struct_field<'a>(
+    value: &'a MatValue,
+    index: Option<usize>,
+    field: &str,
+) -> Option<&'a MatValue> {
+    let MatValue::Struct {
+        fields, elements, ..
+    } = value
+    else {
+        return None;
+    };
+    let element = match index {
+        Some(k) => elements.get(k.checked_sub(1)?)?,
+        None if elements.len() == 1 => &elements[0],
+        None => return None,
+    };
+    element.get(fields.iter().position(|f| f == field)?)
 }
 
-/// A dSPACE signal's listing: by name when no other signal has that name, else by block path.
-fn dspace_info(s: &DspaceSignal, all: &[DspaceSignal]) -> SignalInfo {
-    let unique = all.iter().filter(|o| o.answers_to(s.name)).count() == 1;
-    SignalInfo {
-        column: if unique {
-            s.name.to_string()
-        } else {
-            s.block_path()
-        },
-        len: numel(s.data),
-        kind: SignalKind::DspaceSignal {
-            recording: s.recording.to_string(),
-            path: s.block_path(),
-            unit: s.unit.map(str::to_string),
-        },
+/// `name(k)` as `(name, Some(k))`, `name` as `(name, None)`; `None` for a bad index.
+fn split_index(part: &str) -> Option<(&str, Option<usize>)> {
+    match part.strip_suffix(')').and_then(|p| p.split_once('(')) {
+        Some((name, k)) => Some((name, Some(k.parse().ok()?))),
+        None => Some((part, None)),
     }
 }
 
@@ -336,7 +294,7 @@ fn is_vector(dims: &[usize]) -> bool {
     dims.iter().filter(|&&d| d > 1).count() <= 1
 }
 
-fn numel(value: &MatValue) -> usize {
+pub(super) fn numel(value: &MatValue) -> usize {
     match value {
         MatValue::Numeric { data, .. } => data.len(),
         _ => 0,

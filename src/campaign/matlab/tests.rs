@@ -6,6 +6,7 @@ use super::*;
 pub(super) const PLAIN: &[u8] = include_bytes!("../../../tests/data/matlab/plain.mat");
 pub(super) const PLAIN_Z: &[u8] = include_bytes!("../../../tests/data/matlab/plain_z.mat");
 pub(super) const DSPACE: &[u8] = include_bytes!("../../../tests/data/matlab/dspace.mat");
+pub(super) const RASTERS: &[u8] = include_bytes!("../../../tests/data/matlab/dspace_rasters.mat");
 pub(super) const BIG_ENDIAN: &[u8] = include_bytes!("../../../tests/data/matlab/bigendian.mat");
 const LITTLE_ENDIAN: &[u8] = include_bytes!("../../../tests/data/matlab/littleendian.mat");
 const V4: &[u8] = include_bytes!("../../../tests/data/matlab/v4.mat");
@@ -178,6 +179,7 @@ fn dspace_listing_gives_time_units_and_unique_columns() {
         recording: "rec".into(),
         path: "Model Root/Plant/Agf".into(),
         unit: Some("m/s^2".into()),
+        time: "rec.X.Data".into(),
     };
     assert_eq!(signals[2].kind, kind);
     let e = err(read(DSPACE).signal("rec"));
@@ -186,6 +188,52 @@ fn dspace_listing_gives_time_units_and_unique_columns() {
             "is a dSPACE recording; name one of its signals (`rec.X.Data`, `Model Root/Plant/Xgf`"
         ),
         "{e}"
+    );
+}
+
+#[test]
+fn dspace_struct_array_elements_by_index() {
+    let m = read(DSPACE);
+    assert_eq!(m.signal("rec.Y(2).Data").unwrap(), m.signal("Agf").unwrap());
+    assert_eq!(
+        m.variable("rec")
+            .and_then(|r| r.field("Description"))
+            .and_then(MatValue::text),
+        Some("shaketable fixture")
+    );
+    assert!(err(m.signal("rec.Y.Data")).contains("no variable or signal `rec.Y.Data`"));
+    assert!(err(m.signal("rec.Y(4).Data")).contains("no variable or signal"));
+}
+
+#[test]
+fn dspace_time_bases_follow_x_index() {
+    let m = read(RASTERS);
+    let listed: Vec<(String, usize)> = m.signals().into_iter().map(|s| (s.column, s.len)).collect();
+    let want = [
+        ("rasters.X(1).Data", 100),
+        ("rasters.X(2).Data", 10),
+        ("Fast", 100),
+        ("Slow", 10),
+    ];
+    assert_eq!(listed, want.map(|(c, n)| (c.to_string(), n)));
+    let times: Vec<String> = m
+        .signals()
+        .into_iter()
+        .filter_map(|s| match s.kind {
+            SignalKind::DspaceSignal { time, .. } => Some(time),
+            _ => None,
+        })
+        .collect();
+    assert_eq!(times, ["rasters.X(1).Data", "rasters.X(2).Data"]);
+    assert_close(
+        &m.signal("rasters.X(2).Data").unwrap(),
+        (0..10).map(|k| k as f64 / 100.0),
+        0.0,
+    );
+    assert_close(
+        &m.signal("Model Root/Slow").unwrap(),
+        (0..10).map(|k| -(k as f64)),
+        0.0,
     );
 }
 

@@ -1,7 +1,7 @@
 //! Hostile input: truncation, sizes past the end, absurd dimensions, deep nesting, zlib
 //! bombs, wrong element types, and mutated fixtures (proptest): errors, never panics.
 
-use super::tests::{BIG_ENDIAN, DSPACE, PLAIN, PLAIN_Z};
+use super::tests::{BIG_ENDIAN, DSPACE, PLAIN, PLAIN_Z, RASTERS};
 use super::*;
 use proptest::prelude::*;
 use std::io::Write;
@@ -62,7 +62,7 @@ fn hand_built_file_reads() {
 
 #[test]
 fn every_truncation_is_an_error_or_a_cut_between_variables() {
-    for fixture in [PLAIN, PLAIN_Z, DSPACE, BIG_ENDIAN] {
+    for fixture in [PLAIN, PLAIN_Z, DSPACE, RASTERS, BIG_ENDIAN] {
         let whole = read_mat(fixture, "whole.mat").unwrap().variables;
         for len in 0..fixture.len() {
             if let Ok(cut) = read_mat(&fixture[..len], "cut.mat") {
@@ -194,12 +194,12 @@ proptest! {
     #![proptest_config(ProptestConfig { cases: 2000, ..ProptestConfig::default() })]
     #[test]
     fn mutated_fixtures_never_panic(
-        which in 0usize..4,
+        which in 0usize..5,
         flips in proptest::collection::vec((any::<usize>(), any::<u8>()), 0..6),
         word in proptest::option::of((any::<usize>(), any::<u32>())),
         cut in any::<usize>(),
     ) {
-        let fixture = [PLAIN, PLAIN_Z, DSPACE, BIG_ENDIAN][which];
+        let fixture = [PLAIN, PLAIN_Z, DSPACE, RASTERS, BIG_ENDIAN][which];
         let bytes = mutate(fixture, &flips, word, cut);
         if let Ok(m) = read_mat(&bytes, "mutant.mat") {
             for s in m.signals() {
