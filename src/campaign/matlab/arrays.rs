@@ -113,7 +113,13 @@ impl Parser<'_> {
         if name_len == 0 || name_len > MAX_FIELD_NAME_LEN {
             return Err(self.err(len_el.at, format!("field name length {name_len}")));
         }
-        let names_el = self.expect(buf, pos, end, &[MI_INT8, MI_UINT8], "the field names")?;
+        let names_el = self.expect(
+            buf,
+            pos,
+            end,
+            &[MI_INT8, MI_UINT8, MI_UTF8],
+            "the field names",
+        )?;
         let raw = &buf[names_el.data_at..names_el.end];
         if !raw.len().is_multiple_of(name_len) {
             return Err(self.err(

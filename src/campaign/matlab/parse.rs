@@ -65,7 +65,7 @@ pub(super) struct Parser<'f> {
     inflate_budget: usize,
     /// The budget at the start, for the message when it runs out.
     inflate_limit: usize,
-    /// File offset of the compressed element being read: offsets are then inside its inflated bytes.
+    /// File offset of the compressed element being read (offsets are then in its inflated bytes).
     compressed_at: Option<usize>,
     /// Variable, field and element path, e.g. ["rec", ".Y(2)", ".Data"].
     pub(super) context: Vec<String>,
@@ -173,13 +173,12 @@ impl<'f> Parser<'f> {
     }
 
     /// Every variable after the header.
+    /// Every variable after the header, in file order. A variable without a name is
+    /// MATLAB's subsystem data (the contents of objects), not the user's: it is left out.
     pub(super) fn variables(&mut self, bytes: &[u8]) -> Result<Vec<(String, MatValue)>, MatError> {
         let mut variables = Vec::new();
         let mut pos = HEADER_LEN;
-        while pos < bytes.len() {
-            if bytes.len() - pos < 8 && bytes[pos..].iter().all(|&b| b == 0) {
-                break; // trailing padding
-            }
+        while !only_padding_left(bytes, pos) {
             let el = self.element(bytes, &mut pos, bytes.len())?;
             match el.mi_type {
                 MI_MATRIX => variables.push(self.matrix(bytes, el, 0)?),
@@ -188,26 +187,21 @@ impl<'f> Parser<'f> {
                     let inflated = self.inflate(bytes, el)?;
                     self.compressed_at = Some(el.at);
                     let mut inner = 0;
-                    while inner < inflated.len() {
-                        let m = self.expect(
-                            &inflated,
-                            &mut inner,
-                            inflated.len(),
-                            &[MI_MATRIX],
-                            "a compressed variable",
-                        )?;
+                    while !only_padding_left(&inflated, inner) {
+                        let what = "a compressed variable";
+                        let m =
+                            self.expect(&inflated, &mut inner, inflated.len(), &[MI_MATRIX], what)?;
                         variables.push(self.matrix(&inflated, m, 0)?);
                     }
                     self.compressed_at = None;
                 }
                 t => {
-                    return Err(self.err(
-                        el.at,
-                        format!("top-level element of type {t}, not a variable (14 or 15)"),
-                    ))
+                    let why = format!("top-level element of type {t}, not a variable (14 or 15)");
+                    return Err(self.err(el.at, why));
                 }
             }
         }
+        variables.retain(|(name, _)| !name.is_empty());
         Ok(variables)
     }
 
@@ -257,7 +251,13 @@ impl<'f> Parser<'f> {
         let flags = self.expect(buf, &mut pos, end, &[MI_UINT32], "the array flags")?;
         let word = self.u32_at(buf, flags.data_at, flags.end)?;
         let dims = self.dims(buf, &mut pos, end)?;
-        let name_el = self.expect(buf, &mut pos, end, &[MI_INT8, MI_UINT8], "the array name")?;
+        let name_el = self.expect(
+            buf,
+            &mut pos,
+            end,
+            &[MI_INT8, MI_UINT8, MI_UTF8],
+            "the array name",
+        )?;
         let name = text_until_nul(&buf[name_el.data_at..name_el.end]);
         let top = depth == 0;
         if top {
@@ -301,7 +301,7 @@ impl<'f> Parser<'f> {
     }
 
     fn dims(&self, buf: &[u8], pos: &mut usize, end: usize) -> Result<Vec<usize>, MatError> {
-        let el = self.expect(buf, pos, end, &[MI_INT32], "the dimensions")?;
+        let el = self.expect(buf, pos, end, &[MI_INT32, MI_UINT32], "the dimensions")?;
         let raw = &buf[el.data_at..el.end];
         if !raw.len().is_multiple_of(4) || raw.is_empty() || raw.len() / 4 > MAX_DIMS {
             return Err(self.err(el.at, format!("dimensions of {} bytes", raw.len())));
@@ -320,6 +320,12 @@ impl<'f> Parser<'f> {
             .try_fold(1usize, |n, &d| n.checked_mul(d))
             .ok_or_else(|| self.err(at, format!("absurd dimensions {dims:?}")))
     }
+}
+
+/// Whether nothing but fewer than 8 zero bytes (alignment padding) follows `pos`.
+fn only_padding_left(buf: &[u8], pos: usize) -> bool {
+    buf.get(pos..)
+        .is_none_or(|rest| rest.len() < 8 && rest.iter().all(|&b| b == 0))
 }
 
 /// Bytes up to the first NUL, as text (names are ASCII; anything else is kept lossily).

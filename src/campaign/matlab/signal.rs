@@ -48,11 +48,11 @@ pub enum SignalKind {
 impl MatFile {
     /// The samples of `column` (see the module doc for the forms it takes).
     pub fn signal(&self, column: &str) -> Result<Vec<f64>, MatError> {
-        if let Some(value) = self.lookup(column) {
+        if let Some(value) = self.value_at(column) {
             return self.vector(column, value);
         }
         if let Some((base, k)) = column.rsplit_once(':') {
-            if let (Some(value), Ok(k)) = (self.lookup(base), k.parse::<usize>()) {
+            if let (Some(value), Ok(k)) = (self.value_at(base), k.parse::<usize>()) {
                 return self.matrix_column(column, value, k);
             }
         }
@@ -85,8 +85,9 @@ impl MatFile {
         out
     }
 
-    /// A variable, or a struct field by dotted path (`rec.Y(2).Data`).
-    fn lookup(&self, path: &str) -> Option<&MatValue> {
+    /// A variable, or a struct field by dotted path with 1-based element indices
+    /// (`rec.Y(2).Data`, `rec.Description`).
+    pub fn value_at(&self, path: &str) -> Option<&MatValue> {
         let mut parts = path.split('.');
         let (name, mut index) = split_index(parts.next()?)?;
         let mut value = self.variable(name)?;

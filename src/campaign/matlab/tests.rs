@@ -272,3 +272,109 @@ fn other_formats_are_refused_by_name() {
     no_mark[126..128].copy_from_slice(b"XX");
     assert!(err(read_mat(&no_mark, "a.mat")).contains("no endian mark IM or MI at byte 126"));
 }
+
+fn matlab_written(name: &str) -> MatFile {
+    let path = format!(
+        "{}/tests/data/matlab/matlab-written/{name}",
+        env!("CARGO_MANIFEST_DIR")
+    );
+    read_mat(&std::fs::read(path).unwrap(), name).unwrap()
+}
+
+fn number(value: &MatValue) -> f64 {
+    match value {
+        MatValue::Numeric { data, .. } if data.len() == 1 => data[0],
+        other => panic!("not a scalar: {other:?}"),
+    }
+}
+
+#[test]
+fn matlab_written_big_endian_matrix_stored_as_bytes() {
+    let m = matlab_written("testmatrix_6.1_SOL2.mat");
+    assert_eq!(m.signal("testmatrix:1").unwrap(), [1.0, 2.0, 3.0]);
+    assert_eq!(m.signal("testmatrix:5").unwrap(), [5.0, 0.0, 0.0]);
+    assert_eq!(
+        matlab_written("miuint32_for_miint32.mat")
+            .signal("an_array")
+            .unwrap(),
+        (0..10).map(f64::from).collect::<Vec<_>>()
+    );
+}
+
+#[test]
+fn matlab_written_structs_and_cells() {
+    let m = matlab_written("teststructarr_6.1_SOL2.mat");
+    let Some(MatValue::Struct {
+        dims,
+        fields,
+        elements,
+    }) = m.variable("teststructarr")
+    else {
+        panic!()
+    };
+    assert_eq!(
+        (dims.as_slice(), fields.as_slice()),
+        (
+            [1, 2].as_slice(),
+            ["one".to_string(), "two".to_string()].as_slice()
+        )
+    );
+    assert_eq!(
+        (number(&elements[0][0]), number(&elements[0][1])),
+        (1.0, 2.0)
+    );
+    assert_eq!(
+        (elements[1][0].text(), elements[1][1].text()),
+        (Some("number 1"), Some("number 2"))
+    );
+    let m = matlab_written("teststruct_7.4_GLNX86.mat");
+    let want = [2f64.sqrt(), std::f64::consts::E, std::f64::consts::PI];
+    assert_close(
+        &m.signal("teststruct.doublefield").unwrap(),
+        want.into_iter(),
+        1e-15,
+    );
+    assert_eq!(
+        m.value_at("teststruct.stringfield")
+            .and_then(MatValue::text),
+        Some("Rats live on no evil star.")
+    );
+    assert!(err(m.signal("teststruct.complexfield")).contains("complex numeric array"));
+    let m = matlab_written("testcellnest_7.4_GLNX86.mat");
+    let Some(MatValue::Cell { elements, .. }) = m.variable("testcellnest") else {
+        panic!()
+    };
+    let MatValue::Cell {
+        elements: inner, ..
+    } = &elements[1]
+    else {
+        panic!()
+    };
+    let MatValue::Cell {
+        elements: innermost,
+        ..
+    } = &inner[2]
+    else {
+        panic!()
+    };
+    assert_eq!(
+        (
+            number(&elements[0]),
+            number(&inner[1]),
+            number(&innermost[1])
+        ),
+        (1.0, 3.0, 5.0)
+    );
+}
+
+#[test]
+fn matlab_written_v73_is_refused() {
+    let path = format!(
+        "{}/tests/data/matlab/matlab-written/testhdf5_7.4_GLNX86.mat",
+        env!("CARGO_MANIFEST_DIR")
+    );
+    assert!(matches!(
+        read_mat(&std::fs::read(path).unwrap(), "h.mat"),
+        Err(MatError::V73 { .. })
+    ));
+}

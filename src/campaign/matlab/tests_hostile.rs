@@ -61,6 +61,15 @@ fn hand_built_file_reads() {
 }
 
 #[test]
+fn nameless_subsystem_data_is_not_a_variable() {
+    let subsystem = matrix(9, &[1, 8], "", &element(2, &[1; 8]));
+    let bytes = file(&[matrix(6, &[1, 1], "v", &doubles(&[2.0])), subsystem]);
+    let m = read_mat(&bytes, "x.mat").unwrap();
+    assert_eq!(m.variables.len(), 1);
+    assert_eq!(m.signals().len(), 1);
+}
+
+#[test]
 fn every_truncation_is_an_error_or_a_cut_between_variables() {
     for fixture in [PLAIN, PLAIN_Z, DSPACE, RASTERS, BIG_ENDIAN] {
         let whole = read_mat(fixture, "whole.mat").unwrap().variables;
@@ -172,7 +181,8 @@ fn wrong_element_types_name_the_variable_and_offset() {
     );
     let compressed_number = element(15, &zlib(&doubles(&[1.0])));
     let e = err(&file(&[compressed_number]));
-    assert!(e.contains("byte 0 of the compressed variable at byte 128: a compressed variable stored as data type 9"), "{e}");
+    let want = "byte 0 of the compressed variable at byte 128: a compressed variable stored as data type 9";
+    assert!(e.contains(want), "{e}");
 }
 
 /// A fixture with some bytes replaced, one aligned 32-bit word overwritten, and a cut.
