@@ -7,15 +7,19 @@
 //! inside its zlib path (a corrupt compressed variable panics) and inflates without a
 //! bound. A recording comes from outside the project, so this reader must refuse every
 //! malformed byte with an error naming the file, the variable and the offset, never panic,
-//! never allocate more than the file's size justifies, and never loop: a few hundred lines
-//! of our own against the MathWorks "MAT-File Format" document do that.
+//! never allocate more than the file's size justifies, and never loop: about a thousand
+//! lines of our own against the MathWorks "MAT-File Format" document do that. They are
+//! checked against files MATLAB itself wrote (big-endian 6.1, compressed 7.4) and against
+//! `scipy.io.savemat`, whose leniencies they share (dimensions stored as miUINT32, names
+//! as miUTF8) except one: a compressed variable whose zlib checksum fails is refused.
 //!
 //! Refused with a clear message: v7.3 (HDF5) and level-4 files, and, when a `column`
 //! addresses them, sparse, complex, object and function-handle variables (a complex
 //! column is refused rather than silently reduced to its real part).
 //!
 //! [`read_mat`] parses the bytes into [`MatFile`]; [`MatFile::signal`] resolves a
-//! campaign `column` (see `signal.rs`); [`MatFile::signals`] lists what a file holds.
+//! campaign `column` (see `signal.rs`); [`MatFile::signals`] lists what a file holds;
+//! [`MatFile::value_at`] reaches any struct field (`rec.Y(2).Unit`).
 
 mod arrays;
 mod dspace;

@@ -139,6 +139,12 @@ impl MatFile {
                 "is text (\"{}\"), not samples",
                 text.chars().take(40).collect::<String>()
             ),
+            MatValue::Numeric { .. } => {
+                format!(
+                    "is a {}, neither a vector nor a 2-D matrix",
+                    value.describe()
+                )
+            }
             other => format!(
                 "is a {}, not a vector of samples; save it as a real double array",
                 other.describe()

@@ -58,6 +58,16 @@ fn hand_built_file_reads() {
         read_mat(&bytes, "x.mat").unwrap().signal("v").unwrap(),
         [1.0, 2.0]
     );
+    let cube = file(&[matrix(6, &[2, 1, 2], "c", &doubles(&[1.0, 2.0, 3.0, 4.0]))]);
+    let e = read_mat(&cube, "x.mat")
+        .unwrap()
+        .signal("c")
+        .unwrap_err()
+        .to_string();
+    assert_eq!(
+        e,
+        "x.mat: `c`: is a 2x1x2 numeric array, neither a vector nor a 2-D matrix"
+    );
 }
 
 #[test]
