@@ -7,6 +7,7 @@
 pub mod files;
 pub mod format;
 pub mod init;
+pub mod matlab;
 pub mod screen;
 pub mod synth;
 
