@@ -419,3 +419,84 @@ fn simulate_one_test_of_a_campaign() {
         "{e}"
     );
 }
+
+/// A MATLAB level-5 file (uncompressed, little-endian) of double row vectors: written by
+/// hand here so the test needs no MATLAB or Python.
+fn mat_file(vars: &[(&str, Vec<f64>)]) -> Vec<u8> {
+    let mut out = vec![b' '; 116];
+    out[..19].copy_from_slice(b"MATLAB 5.0 MAT-file");
+    out.extend_from_slice(&[0u8; 8]);
+    out.extend_from_slice(&0x0100u16.to_le_bytes());
+    out.extend_from_slice(b"IM");
+    let element = |ty: u32, data: &[u8]| {
+        let mut e = Vec::new();
+        e.extend_from_slice(&ty.to_le_bytes());
+        e.extend_from_slice(&(data.len() as u32).to_le_bytes());
+        e.extend_from_slice(data);
+        while e.len() % 8 != 0 {
+            e.push(0);
+        }
+        e
+    };
+    for (name, x) in vars {
+        let mut body = Vec::new();
+        body.extend(element(6, &[6u8, 0, 0, 0, 0, 0, 0, 0])); // miUINT32 flags: mxDOUBLE
+        let dims: Vec<u8> = [1i32, x.len() as i32]
+            .iter()
+            .flat_map(|d| d.to_le_bytes())
+            .collect();
+        body.extend(element(5, &dims)); // miINT32 dimensions 1 x n
+        body.extend(element(1, name.as_bytes())); // miINT8 name
+        let data: Vec<u8> = x.iter().flat_map(|v| v.to_le_bytes()).collect();
+        body.extend(element(9, &data)); // miDOUBLE
+        out.extend(element(14, &body)); // miMATRIX
+    }
+    out
+}
+
+/// A test recorded in a MATLAB file (lab variable names, mm and kN) reads back through
+/// `[columns]` as the record it came from; a mapped variable the file lacks is named.
+#[test]
+fn a_matlab_recording_reads_back_through_the_mapping() {
+    let mut c = small_campaign();
+    c.info.tests.truncate(1); // R1, displacement control
+    c.records.truncate(1);
+    let tmp = tempfile::tempdir().unwrap();
+    let dir = tmp.path().join("mat");
+    write_campaign(&c, &dir).unwrap();
+    let r = &c.records[0];
+    let scaled = |x: &[f64], k: f64| x.iter().map(|v| v * k).collect::<Vec<f64>>();
+    let vars = [
+        ("lvdt_mm", scaled(&r.displacement_m, 1000.0)),
+        ("load_kN", scaled(&r.force_n, 1e-3)),
+        ("acc", r.acceleration_m_s2.clone()),
+        ("ref_mm", scaled(&r.ref_displacement_m, 1000.0)),
+        ("u", r.valve_command.clone()),
+    ];
+    std::fs::remove_file(dir.join("R1.csv")).unwrap();
+    std::fs::write(dir.join("R1.mat"), mat_file(&vars)).unwrap();
+    let toml = std::fs::read_to_string(dir.join("campaign.toml")).unwrap();
+    let toml = toml.replace("file = \"R1.csv\"", "file = \"R1.mat\"")
+        + "\n[columns]\ndisplacement_m = { column = \"lvdt_mm\", scale = 0.001 }\n\
+           force_n = { column = \"load_kN\", scale = 1000.0 }\n\
+           acceleration_m_s2 = \"acc\"\nref_displacement_m = { column = \"ref_mm\", scale = 0.001 }\n\
+           valve_command = \"u\"\n";
+    std::fs::write(dir.join("campaign.toml"), &toml).unwrap();
+    let got = read_campaign(&dir).unwrap();
+    let a = &got.records[0];
+    assert!(rel_rms(&a.displacement_m, &r.displacement_m) < 1e-12);
+    assert!(rel_rms(&a.force_n, &r.force_n) < 1e-12);
+    assert_eq!(a.valve_command, r.valve_command);
+    assert!(rel_rms(&a.ref_velocity_m_s, &r.ref_velocity_m_s) < 1e-5);
+    assert!((a.time_s[100] - r.time_s[100]).abs() < 1e-12);
+    std::fs::write(
+        dir.join("campaign.toml"),
+        toml.replace("\"acc\"", "\"accel\""),
+    )
+    .unwrap();
+    let e = read_campaign(&dir).unwrap_err().to_string();
+    assert!(
+        e.contains("R1.mat") && e.contains("`accel`") && e.contains("lvdt_mm"),
+        "{e}"
+    );
+}

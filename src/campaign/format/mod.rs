@@ -112,6 +112,10 @@ pub enum CampaignError {
     /// An in-memory record or campaign that cannot be written in the format.
     #[error("{file}: {message}")]
     Invalid { file: String, message: String },
+    /// A MATLAB file that cannot be read, or a mapped variable or signal it lacks
+    /// (the message names the file and the variable).
+    #[error("{message}")]
+    Matlab { file: String, message: String },
     /// An output refused or not written by the safe-write rules ([`crate::output`]).
     #[error(transparent)]
     Output(#[from] crate::output::OutputError),
@@ -149,7 +153,8 @@ impl CampaignError {
             | CampaignError::Csv { file, .. }
             | CampaignError::Toml { file, .. }
             | CampaignError::Refused { file, .. }
-            | CampaignError::Invalid { file, .. } => file,
+            | CampaignError::Invalid { file, .. }
+            | CampaignError::Matlab { file, .. } => file,
             CampaignError::Output(e) => e.path(),
         }
     }
@@ -250,6 +255,84 @@ pub fn read_record_planned(
     }
     let table = parse_csv(text, file, &plan.read, false)?;
     layout::record_from_lab_table(table, plan, file, rate_source)
+}
+
+/// A test's file (at `real`, shown as `shown`) read under its plan: a MATLAB file when it
+/// ends in `.mat` ([`matlab_table`]), text otherwise.
+fn read_test_file(
+    real: &Path,
+    shown: &str,
+    plan: &ReadPlan,
+    rate_source: &str,
+) -> Result<Record, CampaignError> {
+    let is_mat = real
+        .extension()
+        .is_some_and(|e| e.eq_ignore_ascii_case("mat"));
+    if !is_mat {
+        let text = read_text(real, false).map_err(|e| rename_file(e, shown))?;
+        return read_record_planned(&text, shown, plan, rate_source);
+    }
+    let bytes = read_regular(real, MAX_RECORD_BYTES, "largest plausible record")
+        .map_err(|r| refusal(shown, r))?;
+    let table = matlab_table(&bytes, shown, plan)?;
+    layout::record_from_lab_table(table, plan, shown, rate_source)
+}
+
+/// The signals of a MATLAB file that a test uses, as a table: every mapped `column` (a
+/// variable, `matrix:k`, a dSPACE signal by name or block path) and every variable named
+/// like a project channel. Rows are samples (errors say "line" for the sample number).
+fn matlab_table(bytes: &[u8], file: &str, plan: &ReadPlan) -> Result<CsvTable, CampaignError> {
+    let mat_err = |e: crate::campaign::matlab::MatError| CampaignError::Matlab {
+        file: file.to_string(),
+        message: e.to_string(),
+    };
+    let mat = crate::campaign::matlab::read_mat(bytes, file).map_err(mat_err)?;
+    let mut names: Vec<String> = plan.columns.values().map(|m| m.column.clone()).collect();
+    for (name, _) in &mat.variables {
+        let project = REQUIRED_CHANNELS.contains(&name.as_str()) || name == SPOOL_CHANNEL;
+        if project && !names.contains(name) {
+            names.push(name.clone());
+        }
+    }
+    names.dedup();
+    let mut columns = Vec::with_capacity(names.len());
+    for name in &names {
+        let x = mat.signal(name).map_err(mat_err)?;
+        if let Some(bad) = x.iter().position(|v| !v.is_finite()) {
+            return Err(CampaignError::Matlab {
+                file: file.to_string(),
+                message: format!("{file}: `{name}`: sample {} is not finite", bad + 1),
+            });
+        }
+        columns.push(x);
+    }
+    let n = columns.first().map_or(0, Vec::len);
+    if let Some((name, c)) = names.iter().zip(&columns).find(|(_, c)| c.len() != n) {
+        return Err(CampaignError::Matlab {
+            file: file.to_string(),
+            message: format!(
+                "{file}: `{name}` has {} samples but `{}` has {n}: the channels of a test must have one length",
+                c.len(),
+                names[0]
+            ),
+        });
+    }
+    if n == 0 {
+        return Err(CampaignError::Matlab {
+            file: file.to_string(),
+            message: format!(
+                "{file}: no samples in the mapped signals ({})",
+                names.join(", ")
+            ),
+        });
+    }
+    Ok(CsvTable {
+        bad: vec![None; names.len()],
+        names,
+        columns,
+        header_line: 0,
+        row_lines: (1..=n).collect(),
+    })
 }
 
 /// The reference channels of a record: what `shaketable simulate` needs.
@@ -429,8 +512,7 @@ pub fn read_campaign(dir: &Path) -> Result<Campaign, CampaignError> {
         .zip(plans.par_iter())
         .map(|((spec, real), plan)| {
             let shown = display(&dir.join(&spec.file));
-            let csv = read_text(real, false).map_err(|e| rename_file(e, &shown))?;
-            read_record_planned(&csv, &shown, plan, &toml_file)
+            read_test_file(real, &shown, plan, &toml_file)
         })
         .collect();
     let mut records = Vec::with_capacity(results.len());
@@ -465,8 +547,7 @@ pub fn read_campaign_test(dir: &Path, name: &str) -> Result<(CampaignInfo, Recor
     };
     let real = locate_test_files(&root, dir, &info, &file_lines, &plans, &toml_file)?;
     let shown = display(&dir.join(&info.tests[i].file));
-    let text = read_text(&real[i], false).map_err(|e| rename_file(e, &shown))?;
-    let record = read_record_planned(&text, &shown, &plans[i], &toml_file)?;
+    let record = read_test_file(&real[i], &shown, &plans[i], &toml_file)?;
     Ok((info, record))
 }
 
@@ -479,7 +560,8 @@ fn rename_file(e: CampaignError, file: &str) -> CampaignError {
         | CampaignError::Csv { file: f, .. }
         | CampaignError::Toml { file: f, .. }
         | CampaignError::Refused { file: f, .. }
-        | CampaignError::Invalid { file: f, .. } => *f = file.to_string(),
+        | CampaignError::Invalid { file: f, .. }
+        | CampaignError::Matlab { file: f, .. } => *f = file.to_string(),
         // an output error names the path it could not write; never renamed
         CampaignError::Output(_) => {}
     }
