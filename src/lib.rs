@@ -11,6 +11,7 @@ pub mod fmi;
 pub mod identify;
 pub mod linear;
 pub mod model;
+pub mod motion;
 pub mod output;
 pub mod params;
 pub mod report;

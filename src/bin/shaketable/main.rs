@@ -11,6 +11,7 @@ mod identify;
 mod limits;
 mod outputs;
 mod params;
+mod record;
 mod simulate;
 
 use clap::{Parser, Subcommand};
@@ -40,6 +41,8 @@ enum Command {
     Identify(identify::Args),
     /// Diagnose what the identified model misses and extend it.
     Diagnose(diagnose::Args),
+    /// Target motions: import a ground motion as a table target, check it against the envelope.
+    Record(record::Args),
     /// Real-time factors of the simulator and of campaign synthesis.
     Bench(bench::Args),
     /// The FMU's generated files (modelDescription.xml, documentation); see scripts/build_fmu.sh.
@@ -62,6 +65,7 @@ fn main() {
         Command::Campaign(a) => campaign::run(a),
         Command::Identify(a) => identify::run(a),
         Command::Diagnose(a) => diagnose::run(a),
+        Command::Record(a) => record::run(a),
         Command::Bench(a) => bench::run(a),
         Command::Fmu(a) => fmu::run(a),
     };

@@ -1,0 +1,399 @@
+//! `shaketable record import|check` as a lab runs them (issue 19, part 1): El Centro 1940
+//! (tests/data/records, dt 0.01 s) made a 0.3 g table target, read back from a PEER AT2
+//! file, checked against the envelope, and the check's demands compared with a
+//! simulation of the table following the target.
+
+use shaketable::model::{Inputs, Model, Reference};
+use shaketable::motion::envelope::check_target;
+use shaketable::motion::prepare::Target;
+use shaketable::motion::target_file::read_target;
+use shaketable::solver::{simulate_run, DEFAULT_MAX_SUBSTEP_S};
+use shaketable::Params;
+use std::path::{Path, PathBuf};
+use std::process::Command;
+
+const ELCENTRO: &str = concat!(
+    env!("CARGO_MANIFEST_DIR"),
+    "/tests/data/records/elcentro_1940_ns_g.txt"
+);
+const G: f64 = 9.80665;
+
+fn shaketable(args: &[&str]) -> (bool, String, String) {
+    let out = Command::new(env!("CARGO_BIN_EXE_shaketable"))
+        .args(args)
+        .output()
+        .expect("runs");
+    (
+        out.status.success(),
+        String::from_utf8_lossy(&out.stdout).into_owned(),
+        String::from_utf8_lossy(&out.stderr).into_owned(),
+    )
+}
+
+fn tmp(name: &str) -> PathBuf {
+    let d = std::env::temp_dir().join(format!("shaketable-record-{name}-{}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&d);
+    std::fs::create_dir_all(&d).unwrap();
+    d
+}
+
+fn import_elcentro(dir: &Path, extra: &[&str]) -> PathBuf {
+    let out = dir.join("target.csv");
+    let mut args = vec!["record", "import", ELCENTRO, "--units", "g", "--dt", "0.01"];
+    args.extend_from_slice(&["--scale-pga", "0.3g", "--out", out.to_str().unwrap()]);
+    args.extend_from_slice(extra);
+    let (ok, stdout, stderr) = shaketable(&args);
+    assert!(ok, "{stdout}{stderr}");
+    out
+}
+
+fn peak(v: &[f64]) -> f64 {
+    v.iter().fold(0.0_f64, |m, x| m.max(x.abs()))
+}
+
+#[test]
+fn elcentro_becomes_a_target_at_rest_with_the_pga_asked() {
+    let dir = tmp("import");
+    let t = read_target(&import_elcentro(&dir, &[])).unwrap();
+    assert_eq!(t.rate_hz.round(), 1024.0);
+    assert!((peak(&t.acceleration_m_s2) - 0.3 * G).abs() < 1e-6 * G);
+    // 39.95 s of record and 3 s at rest at each end
+    assert!((t.duration_s() - 45.95).abs() < 0.01, "{}", t.duration_s());
+    // the peak stays where the record has it (about 2.1 s into the record)
+    let k = t
+        .acceleration_m_s2
+        .iter()
+        .enumerate()
+        .max_by(|a, b| a.1.abs().total_cmp(&b.1.abs()))
+        .unwrap()
+        .0;
+    assert!(
+        (k as f64 / t.rate_hz - 3.0 - 2.15).abs() < 0.1,
+        "peak at {}",
+        k as f64 / t.rate_hz
+    );
+    // integrated from rest, the table ends where it started, at rest
+    let n = t.acceleration_m_s2.len();
+    assert!(t.velocity_m_s[n - 1].abs() < 1e-3 * peak(&t.velocity_m_s));
+    assert!(t.displacement_m[n - 1].abs() < 1e-2 * peak(&t.displacement_m));
+    assert!(peak(&t.displacement_m) < 0.4 && peak(&t.displacement_m) > 0.03);
+    // never overwritten without --force
+    let again = dir.join("target.csv");
+    let (ok, _, stderr) = shaketable(&[
+        "record",
+        "import",
+        ELCENTRO,
+        "--units",
+        "g",
+        "--dt",
+        "0.01",
+        "--out",
+        again.to_str().unwrap(),
+    ]);
+    assert!(!ok && stderr.contains("--force"), "{stderr}");
+}
+
+#[test]
+fn a_peer_at2_file_reads_as_the_same_record() {
+    let dir = tmp("at2");
+    let values: Vec<String> = std::fs::read_to_string(ELCENTRO)
+        .unwrap()
+        .lines()
+        .filter(|l| !l.starts_with('#'))
+        .map(|l| format!("{:>15}", l.trim()))
+        .collect();
+    let mut at2 = format!(
+        "PEER NGA STRONG MOTION DATABASE RECORD\nImperial Valley, 5/19/1940, El Centro, 180\n\
+         ACCELERATION TIME SERIES IN UNITS OF G\nNPTS= {:>6}, DT=   .0100 SEC\n",
+        values.len()
+    );
+    for row in values.chunks(5) {
+        at2.push_str(&row.concat());
+        at2.push('\n');
+    }
+    let file = dir.join("ELCENTRO.AT2");
+    std::fs::write(&file, at2).unwrap();
+    let out = dir.join("from-at2.csv");
+    let (ok, stdout, stderr) = shaketable(&[
+        "record",
+        "import",
+        file.to_str().unwrap(),
+        "--scale-pga",
+        "0.3g",
+        "--out",
+        out.to_str().unwrap(),
+    ]);
+    assert!(ok, "{stdout}{stderr}");
+    assert!(stdout.contains("PEER NGA AT2"), "{stdout}");
+    let from_text = std::fs::read(import_elcentro(&dir, &[])).unwrap();
+    assert_eq!(std::fs::read(&out).unwrap(), from_text);
+    // a unit that contradicts the header is refused with the line
+    let (ok, _, stderr) = shaketable(&[
+        "record",
+        "import",
+        file.to_str().unwrap(),
+        "--units",
+        "m/s2",
+        "--out",
+        dir.join("x.csv").to_str().unwrap(),
+    ]);
+    assert!(!ok && stderr.contains("ELCENTRO.AT2:3:"), "{stderr}");
+}
+
+/// Parameters with a 60-t specimen at 5 Hz (El Centro's band) on the table.
+fn with_specimen(dir: &Path) -> PathBuf {
+    let params = dir.join("specimen.toml");
+    let (_, defaults, _) = shaketable(&["params", "--defaults"]);
+    let with = defaults.replace(
+        "[specimen]\nenabled = false\nmass_kg = 10000.0",
+        "[specimen]\nenabled = true\nmass_kg = 60000.0",
+    );
+    assert_ne!(
+        with, defaults,
+        "the defaults name [specimen] enabled = false, mass_kg = 10000.0"
+    );
+    std::fs::write(&params, with).unwrap();
+    params
+}
+
+/// The check's force and valve demands are the simulator's: play the target through the
+/// model with a specimen, then check the motion the simulated table made; its peak force
+/// and spool opening must be the simulated ones.
+#[test]
+fn the_check_demands_are_what_the_simulated_table_needed() {
+    let dir = tmp("check");
+    let target = import_elcentro(&dir, &[]);
+    let params = with_specimen(&dir);
+    let p = Params::from_file(&params).unwrap();
+    let t = read_target(&target).unwrap();
+    let inputs: Vec<Inputs> = (0..t.acceleration_m_s2.len())
+        .map(|k| Inputs {
+            reference: Reference {
+                displacement_m: t.displacement_m[k],
+                velocity_m_s: t.velocity_m_s[k],
+                acceleration_m_s2: t.acceleration_m_s2[k],
+            },
+            external_force_n: 0.0,
+        })
+        .collect();
+    let run = simulate_run(
+        &Model::new(&p),
+        &inputs,
+        t.rate_hz,
+        None,
+        DEFAULT_MAX_SUBSTEP_S,
+    );
+    assert!(run.stop.is_none());
+    let series =
+        |f: fn(&shaketable::model::Outputs) -> f64| run.outputs.iter().map(f).collect::<Vec<_>>();
+    let made = Target {
+        rate_hz: t.rate_hz,
+        acceleration_m_s2: series(|o| o.acceleration_m_s2),
+        velocity_m_s: series(|o| o.velocity_m_s),
+        displacement_m: series(|o| o.displacement_m),
+    };
+    let c = check_target(&p, &made);
+    let sim_force = peak(&series(|o| o.actuator_force_n));
+    let sim_spool = peak(&series(|o| o.spool_position));
+    assert!(
+        (c.peak_force_n - sim_force).abs() < 0.03 * sim_force,
+        "force: check {}, simulated {sim_force}",
+        c.peak_force_n
+    );
+    let opening = c.demands[2].peak;
+    assert!(
+        (opening - sim_spool).abs() < 0.05 * sim_spool,
+        "spool: check {opening}, simulated {sim_spool}"
+    );
+    assert!((c.demands[0].peak - peak(&made.displacement_m)).abs() < 1e-12);
+}
+
+#[test]
+fn the_check_reports_the_envelope_and_sees_a_specimen() {
+    let dir = tmp("verdict");
+    let target = import_elcentro(&dir, &[]);
+    let json = dir.join("c.json");
+    let (ok, stdout, stderr) = shaketable(&[
+        "record",
+        "check",
+        target.to_str().unwrap(),
+        "--json",
+        json.to_str().unwrap(),
+    ]);
+    assert!(ok, "{stdout}{stderr}");
+    assert!(
+        stdout.contains("inside the envelope") && stdout.contains("bare table"),
+        "{stdout}"
+    );
+    let bare: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(&json).unwrap()).unwrap();
+    let bare_force = bare["peak_force_n"].as_f64().unwrap();
+    // 41 t at 0.3 g plus the friction
+    let p = Params::trees_lab();
+    let expected = p.table.mass_kg * 0.3 * G + p.friction.force_n;
+    assert!(
+        (bare_force - expected).abs() < 0.05 * expected,
+        "{bare_force} {expected}"
+    );
+    let params = with_specimen(&dir);
+    let (_, stdout, stderr) = shaketable(&[
+        "record",
+        "check",
+        target.to_str().unwrap(),
+        "--params",
+        params.to_str().unwrap(),
+    ]);
+    assert!(stdout.contains("with the specimen"), "{stdout}{stderr}");
+    let line = stdout
+        .lines()
+        .find(|l| l.starts_with("peak actuator force"))
+        .unwrap();
+    let force: f64 = line.split_whitespace().nth(3).unwrap().parse().unwrap();
+    // a 60-t specimen more than doubles the force of a 41-t table
+    assert!(force > 2.0 * bare_force, "{stdout}");
+    // with a 5-cm stroke the same target leaves the envelope, named by its demand
+    let tight = dir.join("tight.toml");
+    let text = std::fs::read_to_string(&params)
+        .unwrap()
+        .replace("stroke_m = 0.5", "stroke_m = 0.05");
+    std::fs::write(&tight, text).unwrap();
+    let (ok, stdout, stderr) = shaketable(&[
+        "record",
+        "check",
+        target.to_str().unwrap(),
+        "--params",
+        tight.to_str().unwrap(),
+    ]);
+    assert!(!ok, "{stdout}");
+    assert!(
+        stdout.contains("OUTSIDE") && stderr.contains("leaves the table's envelope: stroke"),
+        "{stdout}{stderr}"
+    );
+}
+
+#[test]
+fn hostile_inputs_are_refused_with_the_file_or_the_option() {
+    let dir = tmp("hostile");
+    let out = dir.join("t.csv");
+    let o = out.to_str().unwrap();
+    let cases: Vec<(Vec<&str>, &str)> = vec![
+        (
+            vec![
+                "record",
+                "import",
+                "/dev/zero",
+                "--units",
+                "g",
+                "--dt",
+                "0.01",
+                "--out",
+                o,
+            ],
+            "not a regular file",
+        ),
+        (
+            vec![
+                "record",
+                "import",
+                ELCENTRO,
+                "--units",
+                "g",
+                "--dt",
+                "0.01",
+                "--rate-hz",
+                "1e12",
+                "--out",
+                o,
+            ],
+            "--rate-hz",
+        ),
+        (
+            vec![
+                "record", "import", ELCENTRO, "--units", "g", "--dt", "10", "--out", o,
+            ],
+            "time step",
+        ),
+        (
+            vec![
+                "record",
+                "import",
+                ELCENTRO,
+                "--units",
+                "g",
+                "--dt",
+                "0.01",
+                "--scale-pga",
+                "0.3",
+                "--out",
+                o,
+            ],
+            "give a unit",
+        ),
+        (
+            vec![
+                "record",
+                "import",
+                ELCENTRO,
+                "--units",
+                "g",
+                "--dt",
+                "0.01",
+                "--scale-pga",
+                "NaNg",
+                "--out",
+                o,
+            ],
+            "--scale-pga",
+        ),
+        (
+            vec![
+                "record", "import", ELCENTRO, "--units", "furlong", "--dt", "0.01", "--out", o,
+            ],
+            "--units",
+        ),
+        (
+            vec![
+                "record",
+                "import",
+                ELCENTRO,
+                "--units",
+                "g",
+                "--dt",
+                "0.01",
+                "--scale-pga",
+                "5g",
+                "--out",
+                o,
+            ],
+            "scale it down",
+        ),
+        (
+            vec![
+                "record", "import", ELCENTRO, "--units", "g", "--dt", "0.01", "--out", ELCENTRO,
+                "--force",
+            ],
+            "input",
+        ),
+        (vec!["record", "check", ELCENTRO], "time_s"),
+    ];
+    for (args, want) in cases {
+        let (ok, stdout, stderr) = shaketable(&args);
+        assert!(!ok, "{args:?} passed: {stdout}");
+        assert!(stderr.contains(want), "{args:?}: {stderr}");
+        assert!(!stderr.contains("panicked"), "{stderr}");
+    }
+    // a NaN in the record names its line
+    let bad = dir.join("bad.txt");
+    std::fs::write(&bad, "0 0.1\n0.01 NaN\n0.02 0.3\n").unwrap();
+    let (ok, _, stderr) = shaketable(&[
+        "record",
+        "import",
+        bad.to_str().unwrap(),
+        "--units",
+        "g",
+        "--out",
+        o,
+    ]);
+    assert!(!ok && stderr.contains("bad.txt:2:"), "{stderr}");
+    assert!(!out.exists());
+}
