@@ -397,3 +397,95 @@ fn hostile_inputs_are_refused_with_the_file_or_the_option() {
     assert!(!ok && stderr.contains("bad.txt:2:"), "{stderr}");
     assert!(!out.exists());
 }
+
+/// The lab's loop on the command line: import, offline drive, the lab plays it
+/// (`simulate` on a table with a specimen the model lacks), one online iteration.
+#[test]
+fn drive_offline_then_online_on_the_command_line() {
+    let dir = tmp("drive");
+    let target = import_elcentro(&dir, &["--rate-hz", "512"]);
+    let t = target.to_str().unwrap();
+    let d0 = dir.join("d0");
+    let (ok, stdout, stderr) = shaketable(&["drive", "--target", t, "--out", d0.to_str().unwrap()]);
+    assert!(ok, "{stdout}{stderr}");
+    assert!(stdout.contains("naive drive"), "{stdout}");
+    let m0: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(d0.join("metrics.json")).unwrap()).unwrap();
+    assert_eq!(m0["iteration"], 0);
+    assert_eq!(m0["basis"], "predicted");
+    assert!(m0["rms_error"].as_f64().unwrap() < 0.5 * m0["naive"]["rms_error"].as_f64().unwrap());
+    // the lab plays d0 on its table (a 60-t specimen the model does not know)
+    let lab = with_specimen(&dir);
+    let run0 = dir.join("run0.csv");
+    let drive = d0.join("drive.csv");
+    let (ok, _, stderr) = shaketable(&[
+        "simulate",
+        "--reference",
+        drive.to_str().unwrap(),
+        "--params",
+        lab.to_str().unwrap(),
+        "--out",
+        run0.to_str().unwrap(),
+        "--no-campaign",
+    ]);
+    assert!(ok, "{stderr}");
+    let d1 = dir.join("d1");
+    let args = [
+        "drive",
+        "--target",
+        t,
+        "--previous",
+        d0.to_str().unwrap(),
+        "--measured",
+        run0.to_str().unwrap(),
+        "--out",
+        d1.to_str().unwrap(),
+    ];
+    let (ok, stdout, stderr) = shaketable(&args);
+    assert!(ok, "{stdout}{stderr}");
+    assert!(stdout.contains("shifted by 0.0 ms"), "{stdout}");
+    let m1: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(d1.join("metrics.json")).unwrap()).unwrap();
+    assert_eq!(m1["iteration"], 1);
+    assert_eq!(m1["basis"], "measured");
+    assert_eq!(m1["transfer_pairs"], 1);
+    // the same again replaces the folder drive made; a folder of the user's is kept
+    let (ok, _, stderr) = shaketable(&args);
+    assert!(ok, "{stderr}");
+    let mine = dir.join("mine");
+    std::fs::create_dir_all(&mine).unwrap();
+    std::fs::write(mine.join("notes.txt"), "keep").unwrap();
+    let (ok, _, stderr) = shaketable(&["drive", "--target", t, "--out", mine.to_str().unwrap()]);
+    assert!(!ok && stderr.contains("--force"), "{stderr}");
+    assert_eq!(
+        std::fs::read_to_string(mine.join("notes.txt")).unwrap(),
+        "keep"
+    );
+    // --previous without --measured, and a previous folder of another target, are refused
+    let (ok, _, stderr) = shaketable(&[
+        "drive",
+        "--target",
+        t,
+        "--previous",
+        d0.to_str().unwrap(),
+        "--out",
+        dir.join("x").to_str().unwrap(),
+    ]);
+    assert!(!ok && stderr.contains("--measured"), "{stderr}");
+    let other = import_elcentro(&tmp("drive-other"), &["--rate-hz", "256"]);
+    let (ok, _, stderr) = shaketable(&[
+        "drive",
+        "--target",
+        other.to_str().unwrap(),
+        "--previous",
+        d0.to_str().unwrap(),
+        "--measured",
+        run0.to_str().unwrap(),
+        "--out",
+        dir.join("y").to_str().unwrap(),
+    ]);
+    assert!(
+        !ok && stderr.contains("--previous must come from this target"),
+        "{stderr}"
+    );
+}

@@ -4,11 +4,15 @@
 //! PGA) and checked against the table's envelope with its specimen ([`envelope`]).
 
 pub mod at2;
+pub mod drive;
+pub mod drive_files;
 pub mod envelope;
+pub mod metrics;
 pub mod prepare;
 pub mod read;
 mod spectrum;
 pub mod target_file;
+pub mod transfer;
 
 /// Standard gravity, m/s^2 (the `g` of records in units of g).
 pub const STANDARD_GRAVITY_M_S2: f64 = 9.80665;

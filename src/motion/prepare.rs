@@ -243,7 +243,7 @@ fn at_corner(spectrum: &Periodic, fc_hz: f64, pad: usize) -> Target {
 /// Multiply the first and last `pad` samples by a window rising from 0 to 1 with zero
 /// first and second derivatives at both of its ends (`s - sin(2 pi s)/(2 pi)`), so the
 /// displacement, velocity and acceleration all start and end at zero.
-fn rest_at_ends(d: &mut [f64], pad: usize) {
+pub(super) fn rest_at_ends(d: &mut [f64], pad: usize) {
     let n = d.len();
     let pad = pad.min(n / 2);
     for k in 0..pad {

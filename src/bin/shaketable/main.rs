@@ -5,6 +5,7 @@ mod bench;
 mod campaign;
 mod campaign_init;
 mod diagnose;
+mod drive;
 mod fmu;
 mod frf;
 mod identify;
@@ -43,6 +44,9 @@ enum Command {
     Diagnose(diagnose::Args),
     /// Target motions: import a ground motion as a table target, check it against the envelope.
     Record(record::Args),
+    /// The drive that reproduces a target on the table: offline from the model, or one
+    /// online iteration from the previous drive and the measured run.
+    Drive(drive::Args),
     /// Real-time factors of the simulator and of campaign synthesis.
     Bench(bench::Args),
     /// The FMU's generated files (modelDescription.xml, documentation); see scripts/build_fmu.sh.
@@ -66,6 +70,7 @@ fn main() {
         Command::Identify(a) => identify::run(a),
         Command::Diagnose(a) => diagnose::run(a),
         Command::Record(a) => record::run(a),
+        Command::Drive(a) => drive::run(a),
         Command::Bench(a) => bench::run(a),
         Command::Fmu(a) => fmu::run(a),
     };
