@@ -13,6 +13,7 @@ pub mod read;
 mod spectrum;
 pub mod target_file;
 pub mod transfer;
+pub mod tune;
 
 /// Standard gravity, m/s^2 (the `g` of records in units of g).
 pub const STANDARD_GRAVITY_M_S2: f64 = 9.80665;

@@ -23,6 +23,12 @@ enum What {
         #[arg(long)]
         params: Option<PathBuf>,
     },
+    /// Print a parameter file as the FMU's start values (JSON: variable name -> value),
+    /// for an FMI master (e.g. scripts/play_drive.py) to set before initialisation.
+    StartValues {
+        #[arg(long)]
+        params: Option<PathBuf>,
+    },
 }
 
 pub fn run(args: Args) -> anyhow::Result<()> {
@@ -36,6 +42,23 @@ pub fn run(args: Args) -> anyhow::Result<()> {
             "{}",
             documentation_html(&crate::load_params(params.as_deref())?)
         ),
+        What::StartValues { params } => {
+            use shaketable::fmi::variables::{Kind, Role, VARIABLES};
+            let p = crate::load_params(params.as_deref())?;
+            let mut values = serde_json::Map::new();
+            for v in VARIABLES {
+                if let Role::Parameter(get, _) = v.role {
+                    let x = get(&p);
+                    let value = match v.kind {
+                        Kind::Real => serde_json::json!(x),
+                        Kind::Integer => serde_json::json!(x as i64),
+                        Kind::Boolean => serde_json::json!(x != 0.0),
+                    };
+                    values.insert(v.name.to_string(), value);
+                }
+            }
+            println!("{}", serde_json::to_string_pretty(&values)?);
+        }
     }
     Ok(())
 }

@@ -14,6 +14,7 @@ mod outputs;
 mod params;
 mod record;
 mod simulate;
+mod tune;
 
 use clap::{Parser, Subcommand};
 
@@ -47,6 +48,8 @@ enum Command {
     /// The drive that reproduces a target on the table: offline from the model, or one
     /// online iteration from the previous drive and the measured run.
     Drive(drive::Args),
+    /// TVC gains that flatten the table's transfer with its specimen, poles kept damped.
+    Tune(tune::Args),
     /// Real-time factors of the simulator and of campaign synthesis.
     Bench(bench::Args),
     /// The FMU's generated files (modelDescription.xml, documentation); see scripts/build_fmu.sh.
@@ -71,6 +74,7 @@ fn main() {
         Command::Diagnose(a) => diagnose::run(a),
         Command::Record(a) => record::run(a),
         Command::Drive(a) => drive::run(a),
+        Command::Tune(a) => tune::run(a),
         Command::Bench(a) => bench::run(a),
         Command::Fmu(a) => fmu::run(a),
     };
