@@ -63,6 +63,8 @@ pub struct DriveResult {
     /// Online: the measured run's metrics, its alignment shift (s, positive: the response
     /// came late) and whether a noise estimate weighted the correction.
     pub measured_metrics: Option<Metrics>,
+    /// Online: the measured table acceleration, aligned to the drive.
+    pub measured_response: Option<Vec<f64>>,
     pub trigger_delay_s: Option<f64>,
     pub noise_weighted: bool,
     /// Offline refinements made on the simulated table.
@@ -210,6 +212,7 @@ pub fn offline(
         transfer: Transfer::from_model(p, n, target.rate_hz),
         naive_metrics: Some(naive_metrics),
         measured_metrics: None,
+        measured_response: None,
         trigger_delay_s: None,
         noise_weighted: false,
         refinements: refinements.saturating_sub(1),
@@ -409,6 +412,7 @@ pub fn online(
         transfer,
         naive_metrics: None,
         measured_metrics: Some(measured_metrics),
+        measured_response: Some(response),
         trigger_delay_s: Some(lag as f64 / rate),
         noise_weighted: noise.is_some(),
         refinements: 0,

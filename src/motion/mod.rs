@@ -7,6 +7,7 @@ pub mod at2;
 pub mod drive;
 pub mod drive_files;
 pub mod envelope;
+pub mod figures;
 pub mod metrics;
 pub mod prepare;
 pub mod read;

@@ -122,9 +122,10 @@ pub fn run(a: Args) -> anyhow::Result<()> {
     for (name, text) in folder_files(&result, iteration, a.gain, a.band_hz) {
         std::fs::write(stage.path().join(name), text)?;
     }
+    shaketable::motion::figures::draw(stage.path(), &target, &result, iteration)?;
     stage.commit()?;
     println!(
-        "wrote {}/ (drive.csv, predicted.csv, metrics.json, transfer.csv)",
+        "wrote {}/ (drive.csv, predicted.csv, metrics.json, transfer.csv, time_history.png, spectra.png)",
         a.out.display()
     );
     Ok(())
