@@ -1,0 +1,177 @@
+//! Physically informed starts of the candidates' fits: the apparent mass of the random
+//! tests (specimen, foundation), the velocity plateau (flow saturation), small grids.
+
+use super::effect::Effect;
+use crate::campaign::{Campaign, TestKind};
+use crate::identify::frf::{Welch, WelchOptions};
+use crate::params::Params;
+use num_complex::Complex64;
+use std::f64::consts::PI;
+
+pub(super) fn indices(c: &Campaign, names: &[&str]) -> Vec<usize> {
+    names
+        .iter()
+        .filter_map(|n| c.info.tests.iter().position(|t| t.name == *n))
+        .collect()
+}
+
+/// Apparent mass `F/a` of R2 (reference acceleration as instrument) on 1-40 Hz.
+pub(super) fn apparent_mass(c: &Campaign) -> Option<(Vec<f64>, Vec<Complex64>)> {
+    let (_, r) = c.test("R2").or_else(|| c.test("R3"))?;
+    let fs = c.info.sample_rate_hz;
+    let w = Welch::new(
+        fs,
+        WelchOptions::for_resolution(fs, 0.25).fit_to(r.len(), 8),
+    )
+    .ok()?;
+    let e = w
+        .frf_instrumental(&r.ref_acceleration_m_s2, &r.acceleration_m_s2, &r.force_n)
+        .ok()?;
+    let idx = e.band(1.0, 40.0);
+    Some((
+        idx.iter().map(|&i| e.frequency_hz[i]).collect(),
+        idx.iter().map(|&i| e.h1[i]).collect(),
+    ))
+}
+
+/// Starting points of a candidate's effect parameters (physically informed).
+pub(super) fn starts(
+    effect: Effect,
+    c: &Campaign,
+    base: &Params,
+    informed: Option<&[f64]>,
+) -> Vec<Vec<f64>> {
+    let m = base.table.mass_kg;
+    match effect {
+        Effect::Specimen => {
+            // the specimen's resonance is the largest deviation of F/a from a rigid mass
+            let Some((f, h)) = apparent_mass(c) else {
+                return vec![vec![0.2 * m, 5.0, 0.03]];
+            };
+            let k = (0..f.len())
+                .max_by(|&a, &b| (h[a] - m).norm().total_cmp(&(h[b] - m).norm()))
+                .unwrap_or(0);
+            let fs = f[k];
+            [0.1, 0.3].iter().map(|r| vec![r * m, fs, 0.03]).collect()
+        }
+        Effect::Foundation => {
+            // the FRF fit and a spread over the plausible band, screened by the caller
+            // the FRF fit places the mode to a few percent; its mass and damping trade off
+            // on a smeared peak, so the mass is spread
+            let mut g: Vec<Vec<f64>> = Vec::new();
+            if let Some(f) = informed {
+                for r in [3.0, 10.0, 40.0] {
+                    g.push(vec![r * m, f[1], 0.05]);
+                }
+            }
+            for f in [8.0, 15.0, 25.0, 40.0] {
+                for r in [3.0, 20.0] {
+                    g.push(vec![r * m, f, 0.05]);
+                }
+            }
+            g
+        }
+        Effect::StickSlip => {
+            let mut g = Vec::new();
+            for r in [1.5, 2.5, 3.5] {
+                for v in [0.002, 0.006] {
+                    g.push(vec![r, v]);
+                }
+            }
+            g
+        }
+        Effect::FlowSaturation => {
+            // the velocity plateau of the fastest sines
+            let mut vmax: f64 = 0.0;
+            for (spec, r) in c.info.tests.iter().zip(&c.records) {
+                if spec.kind == TestKind::Sine {
+                    let fs = c.info.sample_rate_hz;
+                    for k in 8..r.len() {
+                        vmax = vmax.max(
+                            ((r.displacement_m[k] - r.displacement_m[k - 8]) * fs / 8.0).abs(),
+                        );
+                    }
+                }
+            }
+            let q = vmax * base.actuator.piston_area_m2;
+            vec![vec![q.max(1e-3)]]
+        }
+        Effect::ValveDeadband => vec![vec![0.01], vec![0.03]],
+    }
+}
+
+/// The start of `effect` read off the data (the foundation's from the LVDT/accelerometer
+/// discrepancy), fitted by [`fit_candidate`] whatever the screening says.
+pub(super) fn informed_start(effect: Effect, c: &Campaign, base: &Params) -> Option<Vec<f64>> {
+    match effect {
+        Effect::Foundation => foundation_start(c, base.table.mass_kg),
+        _ => None,
+    }
+}
+
+/// Foundation starts from R3 (the broadest band; R2, R1 otherwise): the LVDT reads the
+/// table relative to the reaction mass, the accelerometer the table alone, so with the
+/// table's inertia as the force on the reaction mass (`F = -w^2 M x`) it moves by
+/// `r = x_f / x = w^2 (M/M_f) / (w_f^2 - w^2 + 2 i zeta w_f w)` of the table, and
+/// `D = a / (-w^2 x_lvdt) - 1 = r / (1 - r)`. `D` peaks where `r = 1`, at
+/// `w_f / sqrt(1 + M/M_f)`; below the peak `D ~ (w/w_f)^2 M/M_f` gives the mass, and the
+/// half-power width the damping. Returns `(M_f, f_f, zeta)` from the peak (the peak is
+/// read where coherence is high, at 0.25 Hz resolution: a lightly damped mode is narrower
+/// than the 0.5 Hz the other spectra use), or None when `D` has no clear peak.
+pub(super) fn foundation_start(c: &Campaign, table_mass_kg: f64) -> Option<Vec<f64>> {
+    let (_, r) = c
+        .test("R3")
+        .or_else(|| c.test("R2"))
+        .or_else(|| c.test("R1"))?;
+    let fs = c.info.sample_rate_hz;
+    let w = Welch::new(
+        fs,
+        WelchOptions::for_resolution(fs, 0.25).fit_to(r.len(), 4),
+    )
+    .ok()?;
+    let e = w.frf(&r.displacement_m, &r.acceleration_m_s2).ok()?;
+    let idx: Vec<usize> = e
+        .band(3.0, 60.0)
+        .into_iter()
+        .filter(|&i| e.coherence[i] > 0.8)
+        .collect();
+    if idx.len() < 8 {
+        return None;
+    }
+    let d = |i: usize| {
+        let w = 2.0 * PI * e.frequency_hz[i];
+        (e.h1[i] / (-w * w) - 1.0).norm()
+    };
+    let k = *idx.iter().max_by(|&&a, &&b| d(a).total_cmp(&d(b)))?;
+    let peak = d(k);
+    // a clear peak: well above the median level
+    let mut levels: Vec<f64> = idx.iter().map(|&i| d(i)).collect();
+    levels.sort_by(f64::total_cmp);
+    if peak < 5.0 * levels[levels.len() / 2] {
+        return None;
+    }
+    let f_peak = e.frequency_hz[k];
+    // half-power width from the neighbouring bins above 1/sqrt(2) of the peak (at least
+    // one bin: the resolution bounds the damping from below)
+    let df = e.frequency_hz[1] - e.frequency_hz[0];
+    let above = idx
+        .iter()
+        .filter(|&&i| {
+            (e.frequency_hz[i] - f_peak).abs() < 0.2 * f_peak && d(i) > peak / 2f64.sqrt()
+        })
+        .count()
+        .max(1);
+    let zeta = (above as f64 * df / (2.0 * f_peak)).clamp(0.005, 0.3);
+    // the mass ratio from the level an octave below the peak
+    let below = idx
+        .iter()
+        .copied()
+        .filter(|&i| e.frequency_hz[i] < 0.5 * f_peak)
+        .max_by(|&a, &b| e.frequency_hz[a].total_cmp(&e.frequency_hz[b]));
+    let ratio = match below {
+        Some(i) => (d(i) * (f_peak / e.frequency_hz[i]).powi(2)).clamp(1e-3, 2.0),
+        None => 0.05,
+    };
+    let f_f = f_peak * (1.0 + ratio).sqrt();
+    Some(vec![table_mass_kg / ratio, f_f, zeta])
+}
