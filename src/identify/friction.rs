@@ -1,0 +1,226 @@
+//! Stiffness and sliding friction from the triangles (paper 4.2.1) and Bouc-Wen friction
+//! from the slow sines (4.2.3, eqs. 4.13-4.15).
+
+use super::lsq::{minimise, LsqOptions};
+use super::results::{FrictionFit, TriangleFit};
+use super::signals::{derivative, smooth};
+use super::{
+    check_bounds, check_moved, lsq, MIN_SINE_CYCLES, MIN_TRIANGLE_CYCLES, TRIANGLE_FRACTION,
+};
+use crate::campaign::{Campaign, Record, TestSpec};
+use nalgebra::{DMatrix, DVector};
+
+/// Mean-removed steady part of a periodic test: samples after the first cycle and
+/// before the last, where the amplitude has settled (ramps excluded).
+pub(super) fn steady_range(spec: &TestSpec, rec: &Record) -> std::ops::Range<usize> {
+    let n = rec.len();
+    let x = &rec.ref_displacement_m;
+    let amp = spec
+        .amplitude_m
+        .unwrap_or_else(|| x.iter().fold(0.0, |m: f64, v| m.max(v.abs())));
+    // first and last samples where the reference reaches 99 % of the amplitude
+    let first = x.iter().position(|v| v.abs() >= 0.99 * amp).unwrap_or(0);
+    let last = x.iter().rposition(|v| v.abs() >= 0.99 * amp).unwrap_or(n);
+    first..last.max(first)
+}
+
+/// Triangles (eqs. 4.9-4.10): away from reversals the acceleration is zero and
+/// `F_A - M a = k x + F_mu sign(v)`; least squares over every triangle.
+pub fn fit_triangles(c: &Campaign, mass_kg: f64) -> Result<TriangleFit, String> {
+    let fs = c.info.sample_rate_hz;
+    let (mut rows, mut rhs, mut names) = (Vec::new(), Vec::new(), Vec::new());
+    let mut cycles = 0.0;
+    for (spec, rec) in c.info.tests.iter().zip(&c.records) {
+        if spec.kind != crate::campaign::TestKind::Triangle {
+            continue;
+        }
+        names.push(spec.name.clone());
+        let range = steady_range(spec, rec);
+        cycles +=
+            range.len() as f64 / fs * spec.frequency_hz.filter(|f| f.is_finite()).unwrap_or(0.0);
+        let amp = spec.amplitude_m.unwrap_or(1.0);
+        let xs = smooth(&rec.displacement_m, 8);
+        let v = derivative(&xs, fs);
+        for i in range {
+            let x = rec.ref_displacement_m[i];
+            if x.abs() < TRIANGLE_FRACTION * amp && v[i].abs() > 1e-4 {
+                rows.push([rec.displacement_m[i], v[i].signum()]);
+                rhs.push(rec.force_n[i] - mass_kg * rec.acceleration_m_s2[i]);
+            }
+        }
+    }
+    if names.is_empty() {
+        return Err("no triangle test (T1-T6): stiffness and sliding friction not identified from triangles".into());
+    }
+    if cycles.is_nan() || cycles < MIN_TRIANGLE_CYCLES || rows.len() < 10 {
+        return Err(format!(
+            "the triangle tests ({}) hold {cycles:.2} steady cycles and {} samples away from reversals; at least {MIN_TRIANGLE_CYCLES} cycle and 10 samples needed: stiffness and sliding friction not identified",
+            names.join(", "),
+            rows.len()
+        ));
+    }
+    let a = DMatrix::from_fn(rows.len(), 2, |i, j| rows[i][j]);
+    let b = DVector::from_vec(rhs.clone());
+    let (x, sigma) = lsq::linear(&a, &b).ok_or("triangle fit failed")?;
+    let who = names.join(", ");
+    check_bounds(&who, "stiffness (N/m)", x[0], [-1e12, 1e12])?;
+    check_bounds(&who, "sliding friction (N)", x[1], [-1e9, 1e9])?;
+    let step = (rows.len() / 1500).max(1);
+    Ok(TriangleFit {
+        tests: names,
+        stiffness_n_m: x[0],
+        sigma_stiffness_n_m: sigma[0],
+        sliding_friction_n: x[1],
+        displacement_m: rows.iter().step_by(step).map(|r| r[0]).collect(),
+        elastic_force_n: rows
+            .iter()
+            .zip(&rhs)
+            .step_by(step)
+            .map(|(r, f)| f - x[1] * r[1])
+            .collect(),
+    })
+}
+
+/// Bouc-Wen `Z` along a displacement path (eq. 4.15 is rate independent:
+/// `dZ = (1 - Z^2 (b + (1 - b) sign(Z dx))) dx / Y`), sub-stepped for accuracy.
+pub fn bouc_wen_path(x: &[f64], yield_m: f64, shape: f64, z0: f64) -> Vec<f64> {
+    let mut z = z0;
+    let mut out = Vec::with_capacity(x.len());
+    out.push(z);
+    for i in 1..x.len() {
+        let dx = x[i] - x[i - 1];
+        let n = ((dx.abs() / (0.2 * yield_m)).ceil() as usize).clamp(1, 1000);
+        let h = dx / n as f64;
+        for _ in 0..n {
+            let s = (z * h).signum();
+            z += (1.0 - z * z * (shape + (1.0 - shape) * s)) * h / yield_m;
+            z = z.clamp(-1.0, 1.0);
+        }
+        out.push(z);
+    }
+    out
+}
+
+/// The steady part of a sine test: smoothed displacement and its velocity, measured
+/// acceleration and force.
+pub(super) struct SineData {
+    pub(super) name: String,
+    pub(super) x: Vec<f64>,
+    pub(super) v: Vec<f64>,
+    pub(super) a: Vec<f64>,
+    pub(super) f: Vec<f64>,
+}
+
+/// The sine tests `names` of `c` with at least [`MIN_SINE_CYCLES`] steady cycles; the
+/// others are named in the second list with the reason.
+pub(super) fn sine_data(c: &Campaign, names: &[&str]) -> (Vec<SineData>, Vec<String>) {
+    let fs = c.info.sample_rate_hz;
+    let mut short = Vec::new();
+    let data = names
+        .iter()
+        .filter_map(|n| c.test(n))
+        .filter(|(s, _)| s.kind == crate::campaign::TestKind::Sine)
+        .filter(|(spec, rec)| {
+            let r = steady_range(spec, rec);
+            let f = spec.frequency_hz.filter(|f| f.is_finite()).unwrap_or(0.0);
+            let cycles = r.len() as f64 / fs * f;
+            let ok = cycles >= MIN_SINE_CYCLES;
+            if !ok {
+                short.push(format!(
+                    "{} ({}): {cycles:.2} steady cycles, at least {MIN_SINE_CYCLES} needed: not used",
+                    spec.name, spec.file
+                ));
+            }
+            ok
+        })
+        .map(|(spec, rec)| {
+            let r = steady_range(spec, rec);
+            let xs = smooth(&rec.displacement_m, 8);
+            let v = derivative(&xs, fs);
+            SineData {
+                name: spec.name.clone(),
+                x: xs[r.clone()].to_vec(),
+                v: v[r.clone()].to_vec(),
+                a: rec.acceleration_m_s2[r.clone()].to_vec(),
+                f: rec.force_n[r].to_vec(),
+            }
+        })
+        .collect();
+    (data, short)
+}
+
+/// Bouc-Wen parameters (eqs. 4.14-4.15) fitted to `F_D = F_A - M a - k x` (eq. 4.13)
+/// of the slow sines; `F_mu` enters linearly, `Y` and `b` by Levenberg-Marquardt.
+pub fn fit_friction(
+    c: &Campaign,
+    mass_kg: f64,
+    stiffness: f64,
+    f_mu0: f64,
+) -> Result<FrictionFit, String> {
+    let slow = ["S1", "S2", "S4", "S5", "S7", "S8"];
+    let (data, short) = sine_data(c, &slow);
+    if data.is_empty() {
+        return Err(format!(
+            "no slow sine test (S1, S2, S4, S5, S7, S8) usable: Bouc-Wen friction not identified{}",
+            short.iter().map(|s| format!("; {s}")).collect::<String>()
+        ));
+    }
+    let fd: Vec<Vec<f64>> = data
+        .iter()
+        .map(|d| {
+            (0..d.x.len())
+                .map(|i| d.f[i] - mass_kg * d.a[i] - stiffness * d.x[i])
+                .collect()
+        })
+        .collect();
+    // decimate: the friction changes over Y, well resolved at 128 Hz
+    let dec = 4;
+    let residual = |p: &[f64]| -> Option<Vec<f64>> {
+        let (fmu, y, b) = (p[0], p[1], p[2]);
+        let mut r = Vec::new();
+        for (d, fdi) in data.iter().zip(&fd) {
+            let z = bouc_wen_path(&d.x, y, b, d.v[0].signum());
+            for i in (0..z.len()).step_by(dec) {
+                r.push(fmu * z[i] - fdi[i]);
+            }
+        }
+        Some(r)
+    };
+    let f0 = if f_mu0.is_finite() && f_mu0 > 0.0 {
+        f_mu0
+    } else {
+        1000.0
+    };
+    let (t0, scale) = ([f0, 1e-3, 0.5], [f0, 1e-3, 0.5]);
+    let fit = minimise(
+        residual,
+        &t0,
+        &[0.0, 1e-5, 0.0],
+        &[1e7, 0.05, 0.999],
+        &scale,
+        LsqOptions::default(),
+    )
+    .ok_or("Bouc-Wen fit failed")?;
+    let who = data
+        .iter()
+        .map(|d| d.name.as_str())
+        .collect::<Vec<_>>()
+        .join(", ");
+    check_moved(&who, "Bouc-Wen fit", &fit, &t0, &scale)?;
+    let (fmu, y, b) = (fit.theta[0], fit.theta[1], fit.theta[2]);
+    let d0 = &data[0];
+    let z = bouc_wen_path(&d0.x, y, b, d0.v[0].signum());
+    let step = (d0.x.len() / 2000).max(1);
+    Ok(FrictionFit {
+        tests: data.iter().map(|d| d.name.clone()).collect(),
+        force_n: fmu,
+        yield_displacement_m: y,
+        shape: b,
+        sigma_force_n: fit.sigma[0],
+        rms_error_n: (fit.cost / fit.residuals as f64).sqrt(),
+        displacement_m: d0.x.iter().step_by(step).copied().collect(),
+        velocity_m_s: d0.v.iter().step_by(step).copied().collect(),
+        dissipative_force_n: fd[0].iter().step_by(step).copied().collect(),
+        fitted_force_n: z.iter().step_by(step).map(|z| fmu * z).collect(),
+    })
+}

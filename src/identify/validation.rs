@@ -1,0 +1,77 @@
+//! Validation of the identified model on the table transfer function (paper section 5).
+
+use super::frf::FrfEstimate;
+use super::results::{FrfData, Validation};
+use super::servovalve::relative_error;
+use super::signals::welch_for;
+use super::VALIDATION_BAND_HZ;
+use crate::campaign::{Campaign, Record};
+use crate::linear::{Linearisation, TfFigures};
+use crate::params::{ActuatorModel, Params};
+use crate::solver::{simulate_record, DEFAULT_MAX_SUBSTEP_S};
+use crate::Model;
+use num_complex::Complex64;
+
+/// Measured table TF of a random test: reference acceleration -> table acceleration.
+pub(super) fn table_tf_of(rec: &Record, fs: f64) -> Result<FrfEstimate, String> {
+    let w = welch_for(fs, rec.len()).map_err(|e| e.to_string())?;
+    w.frf(&rec.ref_acceleration_m_s2, &rec.acceleration_m_s2)
+        .map_err(|e| e.to_string())
+}
+
+/// Validation (section 5): the measured table TF of `name` against the identified
+/// model's, analytic (ideal actuator) and simulated (nonlinear actuator).
+pub fn validate(c: &Campaign, name: &str, params: &Params) -> Result<Validation, String> {
+    let (spec, rec) = c
+        .test(name)
+        .ok_or_else(|| format!("no {name} test: validation skipped"))?;
+    let fs = c.info.sample_rate_hz;
+    let mut p = *params;
+    p.controller = c.controller_for(spec);
+    let meas = table_tf_of(rec, fs)?;
+    let idx = meas.band(VALIDATION_BAND_HZ[0], VALIDATION_BAND_HZ[1]);
+    let h: Vec<Complex64> = idx.iter().map(|&i| meas.h1[i]).collect();
+    let f: Vec<f64> = idx.iter().map(|&i| meas.frequency_hz[i]).collect();
+    let mut pi = p;
+    pi.actuator.model = ActuatorModel::Ideal;
+    let lin = Linearisation::new(&pi);
+    let ideal: Vec<Complex64> = f.iter().map(|&x| lin.table_tf(x)).collect();
+    let mut pn = p;
+    pn.actuator.model = ActuatorModel::Nonlinear;
+    let sim = simulate_record(
+        &Model::new(&pn),
+        &rec.inputs(),
+        fs,
+        None,
+        DEFAULT_MAX_SUBSTEP_S,
+    );
+    let acc: Vec<f64> = sim.iter().map(|o| o.acceleration_m_s2).collect();
+    let w = welch_for(fs, rec.len()).map_err(|e| e.to_string())?;
+    let simf = w
+        .frf(&rec.ref_acceleration_m_s2, &acc)
+        .map_err(|e| e.to_string())?;
+    let nonlinear: Vec<Complex64> = idx.iter().map(|&i| simf.h1[i]).collect();
+    // the peak search runs over the validation band only (issue 14, item 9)
+    let measured_figures = TfFigures::from_frf(&crate::linear::Frf {
+        frequency_hz: f.clone(),
+        response: h.clone(),
+    });
+    let model_figures = lin.table_tf_figures();
+    let ones = vec![1.0; f.len()];
+    Ok(Validation {
+        test: name.to_string(),
+        table_tf_error: relative_error(&ideal, &h),
+        table_tf_error_nonlinear: relative_error(&nonlinear, &h),
+        peak_hz: model_figures.map(|m| m.peak_hz).unwrap_or(f64::NAN),
+        measured_figures,
+        model_figures,
+        measured: FrfData::from(
+            &f,
+            &h,
+            &idx.iter().map(|&i| meas.coherence[i]).collect::<Vec<_>>(),
+            [0.0, f64::MAX],
+        ),
+        ideal: FrfData::from(&f, &ideal, &ones, [0.0, f64::MAX]),
+        nonlinear: FrfData::from(&f, &nonlinear, &ones, [0.0, f64::MAX]),
+    })
+}
