@@ -129,7 +129,7 @@ fn missing_tests_and_spool_are_named_not_failed() {
     ]);
     let out = String::from_utf8_lossy(&o.stdout);
     assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
-    assert!(out.contains("no R1 test"), "{out}");
+    assert!(out.contains("no valve test"), "{out}");
     assert!(out.contains("R3 has no spool_position channel"), "{out}");
     assert!(out.contains("no slow sine test"), "{out}");
     let v: serde_json::Value =

@@ -101,6 +101,14 @@ pub fn bouc_wen_path(x: &[f64], yield_m: f64, shape: f64, z0: f64) -> Vec<f64> {
     out
 }
 
+/// The tests of a list, or what such a test would be when there is none.
+pub(super) fn slow_list(names: &[String], none: &str) -> String {
+    match names.is_empty() {
+        true => format!("no test is {none}"),
+        false => names.join(", "),
+    }
+}
+
 /// The steady part of a sine test: smoothed displacement and its velocity, measured
 /// acceleration and force.
 pub(super) struct SineData {
@@ -153,15 +161,17 @@ pub(super) fn sine_data(c: &Campaign, names: &[&str]) -> (Vec<SineData>, Vec<Str
 /// of the slow sines; `F_mu` enters linearly, `Y` and `b` by Levenberg-Marquardt.
 pub fn fit_friction(
     c: &Campaign,
+    slow: &[String],
     mass_kg: f64,
     stiffness: f64,
     f_mu0: f64,
 ) -> Result<FrictionFit, String> {
-    let slow = ["S1", "S2", "S4", "S5", "S7", "S8"];
-    let (data, short) = sine_data(c, &slow);
+    let names: Vec<&str> = slow.iter().map(String::as_str).collect();
+    let (data, short) = sine_data(c, &names);
     if data.is_empty() {
         return Err(format!(
-            "no slow sine test (S1, S2, S4, S5, S7, S8) usable: Bouc-Wen friction not identified{}",
+            "no slow sine test ({}) usable: Bouc-Wen friction not identified{}",
+            slow_list(slow, "a sine whose inertia force is at most twice the friction"),
             short.iter().map(|s| format!("; {s}")).collect::<String>()
         ));
     }

@@ -1,12 +1,14 @@
 //! Identification of the model parameters from a campaign (paper section 4), automatic:
-//! every estimator takes the tests it needs by name, and a missing test or channel
-//! is reported, not failed.
+//! every estimator takes the tests it needs by kind and content ([`select`]: a lab names
+//! its tests as it likes), and a missing test or channel is reported, not failed.
 //!
-//! Order (each step uses the earlier ones): servovalve from R1 (4.1.1); stiffness and
-//! sliding friction from the triangles T1-T6 (4.2.1); rigid mass from R2 (4.1.2);
-//! Bouc-Wen friction from the slow sines (4.2.3, eqs. 4.13-4.15); mass by the loop
-//! approach from S3, S6, S9 (4.2.2); oil column from R3 (4.1.3); validation of the
-//! table TF (section 5).
+//! Order (each step uses the earlier ones): servovalve from the valve test (4.1.1,
+//! [`servovalve`]); stiffness and sliding friction from the triangles (4.2.1,
+//! [`friction`]); rigid mass from the mass test (4.1.2, [`mass`]); Bouc-Wen friction from
+//! the slow sines (4.2.3, eqs. 4.13-4.15); mass by the loop approach from the fast sines
+//! (4.2.2, [`periodic`]); oil column from the oil-column test (4.1.3, [`oil_column`]);
+//! validation of the table TF (section 5, [`validation`]). On the paper's program these
+//! are R1, T1-T6, R2, S1/S2/S4/S5/S7/S8, S3/S6/S9, R3 and R2.
 
 pub mod frf;
 mod friction;
@@ -15,6 +17,7 @@ mod mass;
 mod oil_column;
 mod periodic;
 mod results;
+pub mod select;
 mod servovalve;
 mod signals;
 pub mod spool;
@@ -110,18 +113,23 @@ pub fn identify(c: &Campaign) -> Identification {
     identify_screened(&screen(c))
 }
 
-/// Why test `name` is not available: absent, or excluded by the screening.
-fn absent(s: &Screening, name: &str, what: &str) -> String {
+/// Why no test can take a role (`role` says which and what it needs): none of that
+/// kind, or the screening excluded them (named with the reasons).
+fn absent_role(s: &Screening, role: &str, what: &str) -> String {
     let why: Vec<String> = s
         .findings
         .iter()
-        .filter(|f| f.test == name && f.action == Action::TestExcluded)
+        .filter(|f| f.action == Action::TestExcluded)
         .map(|f| f.to_string())
         .collect();
     if why.is_empty() {
-        format!("no {name} test: {what}")
+        format!("no {role}: {what}")
     } else {
-        format!("{name} excluded by screening ({}): {what}", why.join("; "))
+        format!(
+            "no {role} ({} excluded by screening: {}): {what}",
+            why.len(),
+            why.join("; ")
+        )
     }
 }
 
@@ -154,9 +162,15 @@ pub fn identify_screened(s: &Screening) -> Identification {
     p.actuator.flow_gain_m3_s = g.flow_gain_m3_s;
     p.controller = c.info.controller;
 
-    let valve = match c.test("R1") {
-        Some((_, r)) => in_file(c, "R1", fit_servovalve("R1", r, fs)),
-        None => Err(absent(s, "R1", "servovalve not identified (defaults kept)")),
+    let roles = select::random_roles(c);
+    let name = |i: usize| c.info.tests[i].name.as_str();
+    let valve = match roles.valve {
+        Some(i) => in_file(c, name(i), fit_servovalve(name(i), &c.records[i], fs)),
+        None => Err(absent_role(
+            s,
+            "valve test (a random test recording the valve command and the spool)",
+            "servovalve not identified (defaults kept)",
+        )),
     };
     let valve = valve.map_err(|e| note(Err(e))).ok();
     if let Some(v) = &valve {
@@ -166,9 +180,13 @@ pub fn identify_screened(s: &Screening) -> Identification {
         p.servovalve.natural_frequency_hz = v.natural_frequency_hz;
         p.servovalve.damping_ratio = v.damping_ratio;
     }
-    let mass_random = match c.test("R2") {
-        Some((_, r)) => in_file(c, "R2", fit_mass("R2", r, fs)),
-        None => Err(absent(s, "R2", "mass not identified from random data")),
+    let mass_random = match roles.mass {
+        Some(i) => in_file(c, name(i), fit_mass(name(i), &c.records[i], fs)),
+        None => Err(absent_role(
+            s,
+            "mass test (a random test besides the valve test)",
+            "mass not identified from random data",
+        )),
     };
     let mass_random = mass_random.map_err(|e| note(Err(e))).ok();
     let m0 = mass_random.as_ref().map(|m| m.mass_kg);
@@ -180,19 +198,25 @@ pub fn identify_screened(s: &Screening) -> Identification {
         .as_ref()
         .map(|t| t.sliding_friction_n)
         .unwrap_or(p.friction.force_n);
-    let friction = match m0 {
-        Some(m0) => fit_friction(c, m0, k, f_mu0),
-        None => Err("Bouc-Wen friction not identified: it needs the mass from R2".into()),
+    let (slow_sines, fast_sines) = select::sine_roles(c, m0.unwrap_or(p.table.mass_kg), f_mu0);
+    let friction = match (m0, roles.mass) {
+        (Some(m0), _) => fit_friction(c, &slow_sines, m0, k, f_mu0),
+        (None, mass_test) => Err(format!(
+            "Bouc-Wen friction not identified: it needs the mass from {}",
+            mass_test.map_or("a random test", name)
+        )),
     };
     let friction = friction.map_err(|e| note(Err(e))).ok();
-    let mass_periodic = fit_mass_periodic(c, k, friction.as_ref())
+    let mass_periodic = fit_mass_periodic(c, &fast_sines, k, friction.as_ref())
         .map_err(|e| note(Err(e)))
         .ok();
     // refine the random-data mass with the friction removed in the time domain
-    let mass_random = match (&mass_random, &friction, c.test("R2")) {
-        (Some(_), Some(fr), Some((_, r))) => fit_mass_corrected("R2", r, fs, Some((fr, k)))
-            .ok()
-            .or(mass_random),
+    let mass_random = match (&mass_random, &friction, roles.mass) {
+        (Some(_), Some(fr), Some(i)) => {
+            fit_mass_corrected(name(i), &c.records[i], fs, Some((fr, k)))
+                .ok()
+                .or(mass_random)
+        }
         _ => mass_random,
     };
     let mass_kg = final_mass(mass_random.as_ref(), mass_periodic.as_ref());
@@ -209,21 +233,23 @@ pub fn identify_screened(s: &Screening) -> Identification {
         p.friction.yield_displacement_m = fr.yield_displacement_m;
         p.friction.shape = fr.shape.min(0.999);
     }
-    let oil = match (c.test("R3"), mass_kg) {
-        (Some((_, r)), Some(m)) => in_file(c, "R3", fit_oil_column("R3", r, fs, g, m)),
+    let oil = match (roles.oil_column, mass_kg) {
+        (Some(i), Some(m)) => in_file(c, name(i), fit_oil_column(name(i), &c.records[i], fs, g, m)),
         (Some(_), None) => Err("oil column not identified: it needs the identified mass".into()),
-        (None, _) => Err(absent(s, "R3", "oil column not identified")),
+        (None, _) => Err(absent_role(
+            s,
+            "oil-column test (a third random test, with the spool)",
+            "oil column not identified",
+        )),
     };
     let oil = oil.map_err(|e| note(Err(e))).ok();
     if let Some(o) = &oil {
         p.actuator.bulk_modulus_pa = o.bulk_modulus_pa;
         p.actuator.leakage_m3_s_pa = o.leakage_m3_s_pa;
     }
-    let validation_test = if c.test("R2").is_some() { "R2" } else { "R3" };
-    let validation = if c.test(validation_test).is_some() {
-        in_file(c, validation_test, validate(c, validation_test, &p))
-    } else {
-        Err("no R2 or R3 test usable: validation skipped".into())
+    let validation = match roles.validation() {
+        Some(i) => in_file(c, name(i), validate(c, name(i), &p)),
+        None => Err("no random test usable: validation skipped".into()),
     };
     let validation = validation.map_err(|e| note(Err(e))).ok();
     if let Some(v) = &validation {

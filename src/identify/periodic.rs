@@ -1,23 +1,26 @@
 //! The mass by the loop approach from the periodic tests (paper 4.2.2, eqs. 4.5-4.12).
 
-use super::friction::{bouc_wen_path, sine_data};
+use super::friction::{bouc_wen_path, sine_data, slow_list};
 use super::results::{FrictionFit, PeriodicMassFit};
 use super::{check_bounds, lsq, MASS_BOUNDS_KG};
 use crate::campaign::Campaign;
 use nalgebra::{DMatrix, DVector};
 
-/// Mass by the loop approach (eqs. 4.11-4.12) from S3, S6, S9: pairing `t` with `T/2 - t`
+/// Mass by the loop approach (eqs. 4.11-4.12) from the fast sines `fast` ([`super::select`]): pairing `t` with `T/2 - t`
 /// cancels the dissipative force; over whole steady cycles that is the least squares
 /// `F_A - F_D - k x = M a` with the identified friction removed first.
 pub fn fit_mass_periodic(
     c: &Campaign,
+    fast: &[String],
     stiffness: f64,
     friction: Option<&FrictionFit>,
 ) -> Result<PeriodicMassFit, String> {
-    let (data, short) = sine_data(c, &["S3", "S6", "S9"]);
+    let names: Vec<&str> = fast.iter().map(String::as_str).collect();
+    let (data, short) = sine_data(c, &names);
     if data.is_empty() {
         return Err(format!(
-            "no fast sine test (S3, S6, S9) usable: mass not identified by the loop approach{}",
+            "no fast sine test ({}) usable: mass not identified by the loop approach{}",
+            slow_list(fast, "a sine whose inertia force exceeds twice the friction"),
             short.iter().map(|s| format!("; {s}")).collect::<String>()
         ));
     }

@@ -1,0 +1,171 @@
+//! Which tests each estimator of section 4 uses, chosen by kind and content, never by
+//! name: a laboratory names its tests as it likes. On the paper's program (R1-R3, S1-S9,
+//! T1-T6) the rules pick the paper's tests:
+//! - **valve** (4.1.1): a random test recording the valve command and the spool;
+//!   displacement control first (a small displacement over a wide band keeps the loop
+//!   linear: the paper's R1), then the widest band.
+//! - **mass** (4.1.2): of the other random tests, acceleration control first (the
+//!   apparent mass needs the acceleration well above its noise), then the strongest
+//!   measured acceleration (friction matters least: the paper's R2, 0.1 g).
+//! - **oil column** (4.1.3): of the random tests left, those with the spool first, then
+//!   the widest band (the oil column at 14 Hz needs excitation well above it: R3, 125 Hz).
+//! - **validation** (5): the mass test, else the oil-column test.
+//! - **Bouc-Wen friction** (4.2.3): the sines whose inertia force `M A (2 pi f)^2` is at
+//!   most [`SLOW_SINE_INERTIA_RATIO`] times the friction (S1, S2, S4, S5, S7, S8).
+//! - **loop mass** (4.2.2): the other sines, where inertia dominates (S3, S6, S9).
+//! - **stiffness and sliding friction** (4.2.1): every triangle test.
+
+use crate::campaign::{Campaign, Control, TestKind, TestSpec};
+use std::f64::consts::PI;
+
+/// A sine is slow (friction shows, inertia does not) when its inertia force amplitude is
+/// at most this many times the friction force: the paper's slow sines reach 0.8, its fast
+/// ones 5 and more; 2 sits between with margin on both sides.
+pub const SLOW_SINE_INERTIA_RATIO: f64 = 2.0;
+
+/// The random tests' roles (indices into the campaign).
+#[derive(Debug, Clone, Copy, Default, PartialEq, Eq)]
+pub struct RandomRoles {
+    pub valve: Option<usize>,
+    pub mass: Option<usize>,
+    pub oil_column: Option<usize>,
+}
+
+impl RandomRoles {
+    /// The validation test: the mass test, else the oil-column test.
+    pub fn validation(&self) -> Option<usize> {
+        self.mass.or(self.oil_column)
+    }
+}
+
+/// Upper edge of a random test's band: declared, else unbounded (a lab's white noise to
+/// its controller's limit).
+fn band_top_hz(spec: &TestSpec) -> f64 {
+    spec.band_hz.map_or(f64::INFINITY, |b| b[1])
+}
+
+fn rms(x: &[f64]) -> f64 {
+    (x.iter().map(|v| v * v).sum::<f64>() / x.len().max(1) as f64).sqrt()
+}
+
+/// The first of `candidates` by the ranking `key` (greater is better; ties: campaign order).
+fn best_by(candidates: &[usize], key: impl Fn(usize) -> (bool, f64)) -> Option<usize> {
+    candidates.iter().copied().fold(None, |best, i| match best {
+        Some(b) if !greater(key(i), key(b)) => Some(b),
+        _ => Some(i),
+    })
+}
+
+fn greater(a: (bool, f64), b: (bool, f64)) -> bool {
+    (a.0 && !b.0) || (a.0 == b.0 && a.1 > b.1)
+}
+
+/// The random tests' roles in `c` (see the module doc).
+pub fn random_roles(c: &Campaign) -> RandomRoles {
+    let random: Vec<usize> = (0..c.info.tests.len())
+        .filter(|&i| c.info.tests[i].kind == TestKind::Random)
+        .collect();
+    let has_spool = |i: usize| c.records[i].spool_position.is_some();
+    let with_spool: Vec<usize> = random.iter().copied().filter(|&i| has_spool(i)).collect();
+    let valve = best_by(&with_spool, |i| {
+        let s = &c.info.tests[i];
+        (s.control == Control::Displacement, band_top_hz(s))
+    });
+    let others: Vec<usize> = random
+        .iter()
+        .copied()
+        .filter(|&i| Some(i) != valve)
+        .collect();
+    let mass = best_by(&others, |i| {
+        let s = &c.info.tests[i];
+        (
+            s.control == Control::Acceleration,
+            rms(&c.records[i].acceleration_m_s2),
+        )
+    });
+    let left: Vec<usize> = others
+        .iter()
+        .copied()
+        .filter(|&i| Some(i) != mass)
+        .collect();
+    let oil_column = best_by(&left, |i| (has_spool(i), band_top_hz(&c.info.tests[i])));
+    RandomRoles {
+        valve,
+        mass,
+        oil_column,
+    }
+}
+
+/// The sine tests of `c` split into slow (friction) and fast (inertia) ones, by their
+/// declared amplitude and frequency against a table of `mass_kg` with `friction_n`.
+pub fn sine_roles(c: &Campaign, mass_kg: f64, friction_n: f64) -> (Vec<String>, Vec<String>) {
+    let (mut slow, mut fast) = (Vec::new(), Vec::new());
+    for s in c.info.tests.iter().filter(|s| s.kind == TestKind::Sine) {
+        let w = 2.0 * PI * s.frequency_hz.unwrap_or(0.0);
+        let inertia = mass_kg * s.amplitude_m.unwrap_or(0.0).abs() * w * w;
+        if inertia <= SLOW_SINE_INERTIA_RATIO * friction_n.abs() {
+            slow.push(s.name.clone());
+        } else {
+            fast.push(s.name.clone());
+        }
+    }
+    (slow, fast)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::campaign::synth::{synthesise, SynthOptions};
+    use crate::params::Params;
+
+    fn paper_campaign_renamed() -> Campaign {
+        let opts = SynthOptions {
+            random_duration_s: 12.0,
+            ..SynthOptions::default()
+        };
+        let mut c = synthesise(&Params::trees_lab(), &opts, None);
+        // a lab's names, in another order: the roles must not care
+        for (k, t) in c.info.tests.iter_mut().enumerate() {
+            t.name = format!("run_{:02}_{}", 17 - k, t.name.to_lowercase());
+        }
+        c
+    }
+
+    #[test]
+    fn the_paper_tests_are_found_under_any_name() {
+        let c = paper_campaign_renamed();
+        let name = |i: Option<usize>| i.map(|i| c.info.tests[i].name.clone()).unwrap_or_default();
+        let r = random_roles(&c);
+        assert!(name(r.valve).ends_with("_r1"), "{}", name(r.valve));
+        assert!(name(r.mass).ends_with("_r2"), "{}", name(r.mass));
+        assert!(
+            name(r.oil_column).ends_with("_r3"),
+            "{}",
+            name(r.oil_column)
+        );
+        assert_eq!(r.validation(), r.mass);
+        let (slow, fast) = sine_roles(&c, 41_258.0, 4_000.0);
+        let tail = |v: &[String]| {
+            v.iter()
+                .map(|n| n.rsplit('_').next().unwrap().to_string())
+                .collect::<Vec<_>>()
+        };
+        assert_eq!(tail(&slow), ["s1", "s2", "s4", "s5", "s7", "s8"]);
+        assert_eq!(tail(&fast), ["s3", "s6", "s9"]);
+    }
+
+    #[test]
+    fn without_a_spool_there_is_no_valve_test_and_heavier_friction_makes_sines_slow() {
+        let mut c = paper_campaign_renamed();
+        for r in &mut c.records {
+            r.spool_position = None;
+        }
+        let r = random_roles(&c);
+        assert_eq!(r.valve, None);
+        // R1 is displacement-controlled, so R2 still takes the mass role; R1 is left
+        assert!(c.info.tests[r.mass.unwrap()].name.ends_with("_r2"));
+        // ten times the friction: the 0.5-Hz, 5-cm sine (inertia 20 kN) becomes slow
+        let (slow, _) = sine_roles(&c, 41_258.0, 40_000.0);
+        assert!(slow.iter().any(|n| n.ends_with("_s3")));
+    }
+}
