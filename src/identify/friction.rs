@@ -50,7 +50,9 @@ pub fn fit_triangles(c: &Campaign, mass_kg: f64) -> Result<TriangleFit, String> 
         }
     }
     if names.is_empty() {
-        return Err("no triangle test (T1-T6): stiffness and sliding friction not identified from triangles".into());
+        return Err(
+            "no triangle test: stiffness and sliding friction not identified from triangles".into(),
+        );
     }
     if cycles.is_nan() || cycles < MIN_TRIANGLE_CYCLES || rows.len() < 10 {
         return Err(format!(
@@ -171,7 +173,10 @@ pub fn fit_friction(
     if data.is_empty() {
         return Err(format!(
             "no slow sine test ({}) usable: Bouc-Wen friction not identified{}",
-            slow_list(slow, "a sine whose inertia force is at most twice the friction"),
+            slow_list(
+                slow,
+                "a sine whose inertia force is at most twice the friction"
+            ),
             short.iter().map(|s| format!("; {s}")).collect::<String>()
         ));
     }

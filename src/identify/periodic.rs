@@ -20,7 +20,10 @@ pub fn fit_mass_periodic(
     if data.is_empty() {
         return Err(format!(
             "no fast sine test ({}) usable: mass not identified by the loop approach{}",
-            slow_list(fast, "a sine whose inertia force exceeds twice the friction"),
+            slow_list(
+                fast,
+                "a sine whose inertia force exceeds twice the friction"
+            ),
             short.iter().map(|s| format!("; {s}")).collect::<String>()
         ));
     }

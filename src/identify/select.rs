@@ -4,11 +4,12 @@
 //! - **valve** (4.1.1): a random test recording the valve command and the spool;
 //!   displacement control first (a small displacement over a wide band keeps the loop
 //!   linear: the paper's R1), then the widest band.
-//! - **mass** (4.1.2): of the other random tests, acceleration control first (the
-//!   apparent mass needs the acceleration well above its noise), then the strongest
-//!   measured acceleration (friction matters least: the paper's R2, 0.1 g).
-//! - **oil column** (4.1.3): of the random tests left, those with the spool first, then
-//!   the widest band (the oil column at 14 Hz needs excitation well above it: R3, 125 Hz).
+//! - **mass** (4.1.2): acceleration control first (the apparent mass needs the
+//!   acceleration well above its noise), then the strongest measured acceleration
+//!   (friction matters least: the paper's R2, 0.1 g).
+//! - **oil column** (4.1.3): a test other than the mass test with the spool first, then
+//!   acceleration control, then the widest band (the oil column at 14 Hz needs excitation
+//!   well above it: R3, 125 Hz).
 //! - **validation** (5): the mass test, else the oil-column test.
 //! - **Bouc-Wen friction** (4.2.3): the sines whose inertia force `M A (2 pi f)^2` is at
 //!   most [`SLOW_SINE_INERTIA_RATIO`] times the friction (S1, S2, S4, S5, S7, S8).
@@ -48,47 +49,44 @@ fn rms(x: &[f64]) -> f64 {
     (x.iter().map(|v| v * v).sum::<f64>() / x.len().max(1) as f64).sqrt()
 }
 
-/// The first of `candidates` by the ranking `key` (greater is better; ties: campaign order).
-fn best_by(candidates: &[usize], key: impl Fn(usize) -> (bool, f64)) -> Option<usize> {
+/// The first of `candidates` by the ranking `key` (lexicographic, greater is better; ties:
+/// campaign order).
+fn best_by(candidates: &[usize], key: impl Fn(usize) -> (bool, bool, f64)) -> Option<usize> {
     candidates.iter().copied().fold(None, |best, i| match best {
-        Some(b) if !greater(key(i), key(b)) => Some(b),
+        Some(b) if key(i).partial_cmp(&key(b)) != Some(std::cmp::Ordering::Greater) => Some(b),
         _ => Some(i),
     })
 }
 
-fn greater(a: (bool, f64), b: (bool, f64)) -> bool {
-    (a.0 && !b.0) || (a.0 == b.0 && a.1 > b.1)
-}
-
-/// The random tests' roles in `c` (see the module doc).
+/// The random tests' roles in `c` (see the module doc). A test may take several roles
+/// when the campaign has no other (one white-noise test gives the valve, the mass and
+/// the oil column); the oil column avoids the mass test when another test can serve.
 pub fn random_roles(c: &Campaign) -> RandomRoles {
     let random: Vec<usize> = (0..c.info.tests.len())
         .filter(|&i| c.info.tests[i].kind == TestKind::Random)
         .collect();
     let has_spool = |i: usize| c.records[i].spool_position.is_some();
+    let control = |i: usize| c.info.tests[i].control;
     let with_spool: Vec<usize> = random.iter().copied().filter(|&i| has_spool(i)).collect();
     let valve = best_by(&with_spool, |i| {
-        let s = &c.info.tests[i];
-        (s.control == Control::Displacement, band_top_hz(s))
-    });
-    let others: Vec<usize> = random
-        .iter()
-        .copied()
-        .filter(|&i| Some(i) != valve)
-        .collect();
-    let mass = best_by(&others, |i| {
-        let s = &c.info.tests[i];
         (
-            s.control == Control::Acceleration,
-            rms(&c.records[i].acceleration_m_s2),
+            control(i) == Control::Displacement,
+            true,
+            band_top_hz(&c.info.tests[i]),
         )
     });
-    let left: Vec<usize> = others
-        .iter()
-        .copied()
-        .filter(|&i| Some(i) != mass)
-        .collect();
-    let oil_column = best_by(&left, |i| (has_spool(i), band_top_hz(&c.info.tests[i])));
+    let mass = best_by(&random, |i| {
+        let strength = rms(&c.records[i].acceleration_m_s2);
+        (control(i) == Control::Acceleration, true, strength)
+    });
+    let oil_column = best_by(&random, |i| {
+        let band = band_top_hz(&c.info.tests[i]);
+        (
+            Some(i) != mass && has_spool(i),
+            control(i) == Control::Acceleration,
+            band,
+        )
+    });
     RandomRoles {
         valve,
         mass,
@@ -162,8 +160,10 @@ mod tests {
         }
         let r = random_roles(&c);
         assert_eq!(r.valve, None);
-        // R1 is displacement-controlled, so R2 still takes the mass role; R1 is left
+        // R2 still takes the mass role, R3 the oil column (whose estimator then names
+        // the missing spool)
         assert!(c.info.tests[r.mass.unwrap()].name.ends_with("_r2"));
+        assert!(c.info.tests[r.oil_column.unwrap()].name.ends_with("_r3"));
         // ten times the friction: the 0.5-Hz, 5-cm sine (inertia 20 kN) becomes slow
         let (slow, _) = sine_roles(&c, 41_258.0, 40_000.0);
         assert!(slow.iter().any(|n| n.ends_with("_s3")));
