@@ -4,6 +4,7 @@
 use super::effect::Effect;
 use crate::campaign::{Campaign, TestKind};
 use crate::identify::frf::{Welch, WelchOptions};
+use crate::identify::select::random_roles;
 use crate::params::Params;
 use num_complex::Complex64;
 use std::f64::consts::PI;
@@ -15,9 +16,11 @@ pub(super) fn indices(c: &Campaign, names: &[&str]) -> Vec<usize> {
         .collect()
 }
 
-/// Apparent mass `F/a` of R2 (reference acceleration as instrument) on 1-40 Hz.
+/// Apparent mass `F/a` of the mass test (R2 in the paper; else the oil-column test:
+/// [`crate::identify::select`]), the reference acceleration as instrument, on 1-40 Hz.
 pub(super) fn apparent_mass(c: &Campaign) -> Option<(Vec<f64>, Vec<Complex64>)> {
-    let (_, r) = c.test("R2").or_else(|| c.test("R3"))?;
+    let roles = random_roles(c);
+    let r = &c.records[roles.mass.or(roles.oil_column)?];
     let fs = c.info.sample_rate_hz;
     let w = Welch::new(
         fs,
@@ -119,10 +122,10 @@ pub(super) fn informed_start(effect: Effect, c: &Campaign, base: &Params) -> Opt
 /// read where coherence is high, at 0.25 Hz resolution: a lightly damped mode is narrower
 /// than the 0.5 Hz the other spectra use), or None when `D` has no clear peak.
 pub(super) fn foundation_start(c: &Campaign, table_mass_kg: f64) -> Option<Vec<f64>> {
-    let (_, r) = c
-        .test("R3")
-        .or_else(|| c.test("R2"))
-        .or_else(|| c.test("R1"))?;
+    // the broadest excitation first: the oil-column test (R3), the mass test, the valve
+    // test ([`crate::identify::select`])
+    let roles = random_roles(c);
+    let r = &c.records[roles.oil_column.or(roles.mass).or(roles.valve)?];
     let fs = c.info.sample_rate_hz;
     let w = Welch::new(
         fs,

@@ -99,13 +99,10 @@ pub fn write(dir: &Path, c: &Campaign, d: &Diagnosis) -> anyhow::Result<()> {
             file,
         ));
     }
-    // the table TF of R2 (or the first random test): measured, baseline, extended
-    if let Some(i) = c
-        .info
-        .tests
-        .iter()
-        .position(|t| t.kind == crate::campaign::TestKind::Random && t.name != "R1")
-    {
+    // the table TF of the mass test (R2 in the paper; identify::select): measured,
+    // baseline, extended
+    let roles = crate::identify::select::random_roles(c);
+    if let Some(i) = roles.mass.or(roles.oil_column) {
         let r = &c.records[i];
         let fs = c.info.sample_rate_hz;
         if let Ok(w) = Welch::new(
