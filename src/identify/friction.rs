@@ -1,6 +1,7 @@
 //! Stiffness and sliding friction from the triangles (paper 4.2.1) and Bouc-Wen friction
 //! from the slow sines (4.2.3, eqs. 4.13-4.15).
 
+use super::error::IdentifyError;
 use super::lsq::{minimise, LsqOptions};
 use super::results::{FrictionFit, TriangleFit};
 use super::signals::{derivative, smooth};
@@ -26,7 +27,7 @@ pub(super) fn steady_range(spec: &TestSpec, rec: &Record) -> std::ops::Range<usi
 
 /// Triangles (eqs. 4.9-4.10): away from reversals the acceleration is zero and
 /// `F_A - M a = k x + F_mu sign(v)`; least squares over every triangle.
-pub fn fit_triangles(c: &Campaign, mass_kg: f64) -> Result<TriangleFit, String> {
+pub fn fit_triangles(c: &Campaign, mass_kg: f64) -> Result<TriangleFit, IdentifyError> {
     let fs = c.info.sample_rate_hz;
     let (mut rows, mut rhs, mut names) = (Vec::new(), Vec::new(), Vec::new());
     let mut cycles = 0.0;
@@ -50,20 +51,20 @@ pub fn fit_triangles(c: &Campaign, mass_kg: f64) -> Result<TriangleFit, String> 
         }
     }
     if names.is_empty() {
-        return Err(
-            "no triangle test: stiffness and sliding friction not identified from triangles".into(),
-        );
+        return Err(IdentifyError::not_usable(
+            "no triangle test: stiffness and sliding friction not identified from triangles",
+        ));
     }
     if cycles.is_nan() || cycles < MIN_TRIANGLE_CYCLES || rows.len() < 10 {
-        return Err(format!(
+        return Err(IdentifyError::not_usable(format!(
             "the triangle tests ({}) hold {cycles:.2} steady cycles and {} samples away from reversals; at least {MIN_TRIANGLE_CYCLES} cycle and 10 samples needed: stiffness and sliding friction not identified",
             names.join(", "),
             rows.len()
-        ));
+        )));
     }
     let a = DMatrix::from_fn(rows.len(), 2, |i, j| rows[i][j]);
     let b = DVector::from_vec(rhs.clone());
-    let (x, sigma) = lsq::linear(&a, &b).ok_or("triangle fit failed")?;
+    let (x, sigma) = lsq::linear(&a, &b).ok_or(IdentifyError::not_usable("triangle fit failed"))?;
     let who = names.join(", ");
     check_bounds(&who, "stiffness (N/m)", x[0], [-1e12, 1e12])?;
     check_bounds(&who, "sliding friction (N)", x[1], [-1e9, 1e9])?;
@@ -167,18 +168,18 @@ pub fn fit_friction(
     mass_kg: f64,
     stiffness: f64,
     f_mu0: f64,
-) -> Result<FrictionFit, String> {
+) -> Result<FrictionFit, IdentifyError> {
     let names: Vec<&str> = slow.iter().map(String::as_str).collect();
     let (data, short) = sine_data(c, &names);
     if data.is_empty() {
-        return Err(format!(
+        return Err(IdentifyError::not_usable(format!(
             "no slow sine test ({}) usable: Bouc-Wen friction not identified{}",
             slow_list(
                 slow,
                 "a sine whose inertia force is at most twice the friction"
             ),
             short.iter().map(|s| format!("; {s}")).collect::<String>()
-        ));
+        )));
     }
     let fd: Vec<Vec<f64>> = data
         .iter()
@@ -215,7 +216,7 @@ pub fn fit_friction(
         &scale,
         LsqOptions::default(),
     )
-    .ok_or("Bouc-Wen fit failed")?;
+    .ok_or(IdentifyError::not_usable("Bouc-Wen fit failed"))?;
     let who = data
         .iter()
         .map(|d| d.name.as_str())

@@ -1,5 +1,6 @@
 //! The rigid mass from a random test's apparent mass F/a (paper 4.1.2, eq. 4.4).
 
+use super::error::IdentifyError;
 use super::friction::bouc_wen_path;
 use super::results::{FrfData, FrictionFit, MassFit};
 use super::signals::{smooth, welch_for};
@@ -11,7 +12,7 @@ use std::f64::consts::PI;
 /// Apparent mass from a random test (4.1.2): `acceleration -> force` instrumented by the
 /// noise-free reference acceleration (`S_rF / S_ra`), then the linear least squares
 /// `Re = M - k/w^2`, `Im = -c/w` over [`MASS_BAND_HZ`].
-pub fn fit_mass(name: &str, rec: &Record, fs: f64) -> Result<MassFit, String> {
+pub fn fit_mass(name: &str, rec: &Record, fs: f64) -> Result<MassFit, IdentifyError> {
     fit_mass_corrected(name, rec, fs, None)
 }
 
@@ -24,9 +25,9 @@ pub fn fit_mass_corrected(
     rec: &Record,
     fs: f64,
     friction: Option<(&FrictionFit, f64)>,
-) -> Result<MassFit, String> {
+) -> Result<MassFit, IdentifyError> {
     check_random_length(name, rec, fs, "apparent-mass fit")?;
-    let w = welch_for(fs, rec.len()).map_err(|e| format!("{name}: {e}"))?;
+    let w = welch_for(fs, rec.len()).map_err(|e| IdentifyError::failed(name, e))?;
     let force: Vec<f64> = match friction {
         Some((fr, k)) => {
             let x = smooth(&rec.displacement_m, 8);
@@ -39,10 +40,13 @@ pub fn fit_mass_corrected(
     };
     let e = w
         .frf_instrumental(&rec.ref_acceleration_m_s2, &rec.acceleration_m_s2, &force)
-        .map_err(|e| format!("{name}: {e}"))?;
+        .map_err(|e| IdentifyError::failed(name, e))?;
     let idx = e.band(MASS_BAND_HZ[0], MASS_BAND_HZ[1]);
     if idx.len() < 5 {
-        return Err(format!("{name}: too few bins in {MASS_BAND_HZ:?} Hz"));
+        return Err(IdentifyError::failed(
+            name,
+            format!("too few bins in {MASS_BAND_HZ:?} Hz"),
+        ));
     }
     let mut a = DMatrix::zeros(2 * idx.len(), 3);
     let mut b = DVector::zeros(2 * idx.len());
@@ -54,7 +58,8 @@ pub fn fit_mass_corrected(
         a[(2 * r + 1, 1)] = -1.0 / om;
         b[2 * r + 1] = e.h1[i].im;
     }
-    let (x, sigma) = lsq::linear(&a, &b).ok_or_else(|| format!("{name}: mass fit failed"))?;
+    let (x, sigma) =
+        lsq::linear(&a, &b).ok_or_else(|| IdentifyError::failed(name, "mass fit failed"))?;
     check_bounds(name, "mass (kg)", x[0], MASS_BOUNDS_KG)?;
     let low = e.band(1.0, 5.0);
     let plain = low.iter().map(|&i| e.h1[i].re).sum::<f64>() / low.len().max(1) as f64;

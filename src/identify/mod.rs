@@ -10,6 +10,7 @@
 //! validation of the table TF (section 5, [`validation`]). On the paper's program these
 //! are R1, T1-T6, R2, S1/S2/S4/S5/S7/S8, S3/S6/S9, R3 and R2.
 
+mod error;
 pub mod frf;
 mod friction;
 pub mod lsq;
@@ -23,6 +24,7 @@ mod signals;
 pub mod spool;
 mod validation;
 
+pub use error::IdentifyError;
 pub use friction::{bouc_wen_path, fit_friction, fit_triangles};
 pub use mass::{fit_mass, fit_mass_corrected};
 pub use oil_column::fit_oil_column;
@@ -68,25 +70,31 @@ pub const FREQUENCY_BOUNDS_HZ: [f64; 2] = [0.1, 2000.0];
 pub const DAMPING_BOUNDS: [f64; 2] = [0.0, 10.0];
 
 /// `Err` naming `what` of test `name` unless `x` is finite and within `bounds`.
-fn check_bounds(name: &str, what: &str, x: f64, bounds: [f64; 2]) -> Result<(), String> {
+fn check_bounds(name: &str, what: &str, x: f64, bounds: [f64; 2]) -> Result<(), IdentifyError> {
     if x.is_finite() && x >= bounds[0] && x <= bounds[1] {
         Ok(())
     } else {
-        Err(format!(
-            "{name}: {what} = {x:.4e} is outside its physical bounds {bounds:?}: not identified"
-        ))
+        Err(IdentifyError::OutOfBounds {
+            test: name.to_string(),
+            what: what.to_string(),
+            value: x,
+            bounds,
+        })
     }
 }
 
 /// `Err` naming test `name` unless the record lasts `MIN_RANDOM_S`.
-fn check_random_length(name: &str, rec: &Record, fs: f64, what: &str) -> Result<(), String> {
+fn check_random_length(name: &str, rec: &Record, fs: f64, what: &str) -> Result<(), IdentifyError> {
     let secs = rec.len() as f64 / fs;
     if secs >= MIN_RANDOM_S {
         Ok(())
     } else {
-        Err(format!(
-            "{name}: {secs:.2} s of data, the {what} needs at least {MIN_RANDOM_S} s (frequency resolution and averages): not identified"
-        ))
+        Err(IdentifyError::TooShort {
+            test: name.to_string(),
+            seconds: secs,
+            what: what.to_string(),
+            min_s: MIN_RANDOM_S,
+        })
     }
 }
 
@@ -97,13 +105,14 @@ fn check_moved(
     fit: &lsq::LsqFit,
     t0: &[f64],
     scale: &[f64],
-) -> Result<(), String> {
+) -> Result<(), IdentifyError> {
     if fit.moved_from(t0, scale) {
         Ok(())
     } else {
-        Err(format!(
-            "{name}: the {what} did not move from its start values (no information in the data): not identified"
-        ))
+        Err(IdentifyError::DidNotMove {
+            test: name.to_string(),
+            what: what.to_string(),
+        })
     }
 }
 
@@ -115,31 +124,29 @@ pub fn identify(c: &Campaign) -> Identification {
 
 /// Why no test can take a role (`role` says which and what it needs): none of that
 /// kind, or the screening excluded them (named with the reasons).
-fn absent_role(s: &Screening, role: &str, what: &str) -> String {
-    let why: Vec<String> = s
-        .findings
-        .iter()
-        .filter(|f| f.action == Action::TestExcluded)
-        .map(|f| f.to_string())
-        .collect();
-    if why.is_empty() {
-        format!("no {role}: {what}")
-    } else {
-        format!(
-            "no {role} ({} excluded by screening: {}): {what}",
-            why.len(),
-            why.join("; ")
-        )
+fn absent_role(s: &Screening, role: &str, what: &str) -> IdentifyError {
+    IdentifyError::NoTest {
+        role: role.to_string(),
+        excluded: s
+            .findings
+            .iter()
+            .filter(|f| f.action == Action::TestExcluded)
+            .map(|f| f.to_string())
+            .collect(),
+        consequence: what.to_string(),
     }
 }
 
-/// `r` with the file of test `name` appended to its error.
-fn in_file<T>(c: &Campaign, name: &str, r: Result<T, String>) -> Result<T, String> {
+/// `r` with the file of test `name` added to its error.
+fn in_file<T>(c: &Campaign, name: &str, r: Result<T, IdentifyError>) -> Result<T, IdentifyError> {
     let file = c
         .test(name)
         .map(|(s, _)| s.file.clone())
         .unwrap_or_default();
-    r.map_err(|e| format!("{e} [file {file}]"))
+    r.map_err(|e| IdentifyError::InFile {
+        error: Box::new(e),
+        file,
+    })
 }
 
 /// [`identify`] on an already screened campaign.
@@ -148,9 +155,9 @@ pub fn identify_screened(s: &Screening) -> Identification {
     let fs = c.info.sample_rate_hz;
     let g = &c.info.geometry;
     let mut missing = Vec::new();
-    let mut note = |r: Result<(), String>| {
+    let mut note = |r: Result<(), IdentifyError>| {
         if let Err(e) = r {
-            missing.push(e);
+            missing.push(e.to_string());
         }
     };
     // start from the defaults with the lab's geometry and controller; `defaults` lists
@@ -201,10 +208,10 @@ pub fn identify_screened(s: &Screening) -> Identification {
     let (slow_sines, fast_sines) = select::sine_roles(c, m0.unwrap_or(p.table.mass_kg), f_mu0);
     let friction = match (m0, roles.mass) {
         (Some(m0), _) => fit_friction(c, &slow_sines, m0, k, f_mu0),
-        (None, mass_test) => Err(format!(
-            "Bouc-Wen friction not identified: it needs the mass from {}",
-            mass_test.map_or("a random test", name)
-        )),
+        (None, mass_test) => Err(IdentifyError::NeedsUpstream {
+            what: "Bouc-Wen friction".into(),
+            needs: format!("the mass from {}", mass_test.map_or("a random test", name)),
+        }),
     };
     let friction = friction.map_err(|e| note(Err(e))).ok();
     let mass_periodic = fit_mass_periodic(c, &fast_sines, k, friction.as_ref())
@@ -221,10 +228,9 @@ pub fn identify_screened(s: &Screening) -> Identification {
     };
     let mass_kg = final_mass(mass_random.as_ref(), mass_periodic.as_ref());
     if mass_kg.is_none() {
-        note(Err(
-            "no mass estimate: table.mass_kg is not identified (the parameter file keeps the default)"
-                .into(),
-        ));
+        note(Err(IdentifyError::not_usable(
+            "no mass estimate: table.mass_kg is not identified (the parameter file keeps the default)",
+        )));
     }
     p.table.mass_kg = mass_kg.unwrap_or(p.table.mass_kg);
     p.table.stiffness_n_m = k.max(0.0);
@@ -235,7 +241,10 @@ pub fn identify_screened(s: &Screening) -> Identification {
     }
     let oil = match (roles.oil_column, mass_kg) {
         (Some(i), Some(m)) => in_file(c, name(i), fit_oil_column(name(i), &c.records[i], fs, g, m)),
-        (Some(_), None) => Err("oil column not identified: it needs the identified mass".into()),
+        (Some(_), None) => Err(IdentifyError::NeedsUpstream {
+            what: "oil column".into(),
+            needs: "the identified mass".into(),
+        }),
         (None, _) => Err(absent_role(
             s,
             "oil-column test (a third random test, with the spool)",
@@ -249,7 +258,9 @@ pub fn identify_screened(s: &Screening) -> Identification {
     }
     let validation = match roles.validation() {
         Some(i) => in_file(c, name(i), validate(c, name(i), &p)),
-        None => Err("no random test usable: validation skipped".into()),
+        None => Err(IdentifyError::not_usable(
+            "no random test usable: validation skipped",
+        )),
     };
     let validation = validation.map_err(|e| note(Err(e))).ok();
     if let Some(v) = &validation {

@@ -1,5 +1,6 @@
 //! The oil column from the spool-to-force FRF of the oil-column test (paper 4.1.3).
 
+use super::error::IdentifyError;
 use super::frf::FrfEstimate;
 use super::lsq::{minimise, LsqOptions};
 use super::mass::fit_mass;
@@ -36,9 +37,11 @@ pub fn fit_oil_column(
     fs: f64,
     geometry: &crate::campaign::Geometry,
     mass_kg: f64,
-) -> Result<OilColumnFit, String> {
-    let x = spool_channel(rec).ok_or_else(|| {
-        format!("{name} has no spool_position channel: oil column not identified")
+) -> Result<OilColumnFit, IdentifyError> {
+    let x = spool_channel(rec).ok_or_else(|| IdentifyError::MissingChannel {
+        test: name.to_string(),
+        channel: "spool_position",
+        consequence: "oil column not identified",
     })?;
     check_random_length(name, rec, fs, "oil-column fit")?;
     check_bounds(
@@ -47,10 +50,10 @@ pub fn fit_oil_column(
         mass_kg,
         MASS_BOUNDS_KG,
     )?;
-    let w = welch_for(fs, rec.len()).map_err(|e| format!("{name}: {e}"))?;
+    let w = welch_for(fs, rec.len()).map_err(|e| IdentifyError::failed(name, e))?;
     let iv = w
         .frf_instrumental(&rec.valve_command, x, &rec.force_n)
-        .map_err(|e| format!("{name}: {e}"))?;
+        .map_err(|e| IdentifyError::failed(name, e))?;
     let area = geometry.piston_area_m2;
     let kq_a = geometry.flow_gain_m3_s * area;
     // the table's own dissipative/elastic part at R3's amplitude, measured: the apparent
@@ -62,7 +65,7 @@ pub fn fit_oil_column(
             &rec.acceleration_m_s2,
             &rec.force_n,
         )
-        .map_err(|e| format!("{name}: {e}"))?;
+        .map_err(|e| IdentifyError::failed(name, e))?;
     let fit_on = |h: &[Complex64], e: &FrfEstimate| -> Option<(lsq::LsqFit, Vec<usize>)> {
         let idx = e.band(OIL_BAND_HZ[0], OIL_BAND_HZ[1]);
         let k0 = mass_kg * (2.0 * PI * 14.0f64).powi(2);
@@ -93,10 +96,15 @@ pub fn fit_oil_column(
         .map(|f| (f, idx))
     };
     let (fit, _) = fit_on(&iv.h1, &iv).ok_or_else(|| {
-        format!("{name}: oil-column fit failed or did not move from its start values")
+        IdentifyError::failed(
+            name,
+            "oil-column fit failed or did not move from its start values",
+        )
     })?;
     // H1 from the noisy spool, for the report's comparison
-    let plain = w.frf(x, &rec.force_n).map_err(|e| format!("{name}: {e}"))?;
+    let plain = w
+        .frf(x, &rec.force_n)
+        .map_err(|e| IdentifyError::failed(name, e))?;
     let h1fit = fit_on(&plain.h1, &plain).map(|(f, _)| f);
     let figures = |k_oil: f64, leak: f64| {
         let beta = k_oil * geometry.total_oil_volume_m3 / (4.0 * area * area);

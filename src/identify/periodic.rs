@@ -1,5 +1,6 @@
 //! The mass by the loop approach from the periodic tests (paper 4.2.2, eqs. 4.5-4.12).
 
+use super::error::IdentifyError;
 use super::friction::{bouc_wen_path, sine_data, slow_list};
 use super::results::{FrictionFit, PeriodicMassFit};
 use super::{check_bounds, lsq, MASS_BOUNDS_KG};
@@ -14,18 +15,18 @@ pub fn fit_mass_periodic(
     fast: &[String],
     stiffness: f64,
     friction: Option<&FrictionFit>,
-) -> Result<PeriodicMassFit, String> {
+) -> Result<PeriodicMassFit, IdentifyError> {
     let names: Vec<&str> = fast.iter().map(String::as_str).collect();
     let (data, short) = sine_data(c, &names);
     if data.is_empty() {
-        return Err(format!(
+        return Err(IdentifyError::not_usable(format!(
             "no fast sine test ({}) usable: mass not identified by the loop approach{}",
             slow_list(
                 fast,
                 "a sine whose inertia force exceeds twice the friction"
             ),
             short.iter().map(|s| format!("; {s}")).collect::<String>()
-        ));
+        )));
     }
     let mut per = Vec::new();
     let mut sig = Vec::new();
@@ -43,8 +44,8 @@ pub fn fit_mass_periodic(
             d.a.len(),
             (0..d.a.len()).map(|i| d.f[i] - fd[i] - stiffness * d.x[i]),
         );
-        let (x, s) =
-            lsq::linear(&a, &b).ok_or_else(|| format!("{}: loop-approach fit failed", d.name))?;
+        let (x, s) = lsq::linear(&a, &b)
+            .ok_or_else(|| IdentifyError::failed(&d.name, "loop-approach fit failed"))?;
         check_bounds(
             &d.name,
             "mass by the loop approach (kg)",

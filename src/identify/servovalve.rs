@@ -1,5 +1,6 @@
 //! The servovalve from the valve test's command-to-spool FRF (paper 4.1.1, eqs. 4.1-4.2).
 
+use super::error::IdentifyError;
 use super::lsq::{minimise, LsqOptions};
 use super::results::{FrfData, ServovalveFit};
 use super::signals::{spool_channel, welch_for};
@@ -25,19 +26,22 @@ pub fn relative_error(model: &[Complex64], measured: &[Complex64]) -> f64 {
 }
 
 /// Servovalve from R1 (4.1.1): least squares on the complex FRF over the band.
-pub fn fit_servovalve(name: &str, rec: &Record, fs: f64) -> Result<ServovalveFit, String> {
-    let x = spool_channel(rec).ok_or_else(|| {
-        format!("{name} has no spool_position channel: servovalve not identified")
+pub fn fit_servovalve(name: &str, rec: &Record, fs: f64) -> Result<ServovalveFit, IdentifyError> {
+    let x = spool_channel(rec).ok_or_else(|| IdentifyError::MissingChannel {
+        test: name.to_string(),
+        channel: "spool_position",
+        consequence: "servovalve not identified",
     })?;
     check_random_length(name, rec, fs, "servovalve fit")?;
-    let w = welch_for(fs, rec.len()).map_err(|e| format!("{name}: {e}"))?;
+    let w = welch_for(fs, rec.len()).map_err(|e| IdentifyError::failed(name, e))?;
     let e = w
         .frf(&rec.valve_command, x)
-        .map_err(|e| format!("{name}: {e}"))?;
+        .map_err(|e| IdentifyError::failed(name, e))?;
     let idx = e.band(VALVE_BAND_HZ[0], VALVE_BAND_HZ[1]);
     if idx.len() < 10 {
-        return Err(format!(
-            "{name}: too few frequency bins in {VALVE_BAND_HZ:?} Hz"
+        return Err(IdentifyError::failed(
+            name,
+            format!("too few frequency bins in {VALVE_BAND_HZ:?} Hz"),
         ));
     }
     let f: Vec<f64> = idx.iter().map(|&i| e.frequency_hz[i]).collect();
@@ -64,7 +68,7 @@ pub fn fit_servovalve(name: &str, rec: &Record, fs: f64) -> Result<ServovalveFit
         &s1,
         opts,
     )
-    .ok_or_else(|| format!("{name}: first-order valve fit failed"))?;
+    .ok_or_else(|| IdentifyError::failed(name, "first-order valve fit failed"))?;
     check_moved(name, "first-order valve fit", &first, &t1, &s1)?;
     // eq. 4.2: Ks w^2 / (s^2 + 2 xi w s + w^2), from the first-order guess
     let w0 = 1.0 / first.theta[1];
@@ -82,7 +86,7 @@ pub fn fit_servovalve(name: &str, rec: &Record, fs: f64) -> Result<ServovalveFit
         &[1.0, 10.0, 1.0],
         opts,
     )
-    .ok_or_else(|| format!("{name}: second-order valve fit failed"))?;
+    .ok_or_else(|| IdentifyError::failed(name, "second-order valve fit failed"))?;
     check_moved(
         name,
         "second-order valve fit",

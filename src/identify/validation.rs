@@ -1,5 +1,6 @@
 //! Validation of the identified model on the table transfer function (paper section 5).
 
+use super::error::IdentifyError;
 use super::frf::FrfEstimate;
 use super::results::{FrfData, Validation};
 use super::servovalve::relative_error;
@@ -13,18 +14,18 @@ use crate::Model;
 use num_complex::Complex64;
 
 /// Measured table TF of a random test: reference acceleration -> table acceleration.
-pub(super) fn table_tf_of(rec: &Record, fs: f64) -> Result<FrfEstimate, String> {
-    let w = welch_for(fs, rec.len()).map_err(|e| e.to_string())?;
+pub(super) fn table_tf_of(rec: &Record, fs: f64) -> Result<FrfEstimate, IdentifyError> {
+    let w = welch_for(fs, rec.len()).map_err(IdentifyError::not_usable)?;
     w.frf(&rec.ref_acceleration_m_s2, &rec.acceleration_m_s2)
-        .map_err(|e| e.to_string())
+        .map_err(IdentifyError::not_usable)
 }
 
 /// Validation (section 5): the measured table TF of `name` against the identified
 /// model's, analytic (ideal actuator) and simulated (nonlinear actuator).
-pub fn validate(c: &Campaign, name: &str, params: &Params) -> Result<Validation, String> {
+pub fn validate(c: &Campaign, name: &str, params: &Params) -> Result<Validation, IdentifyError> {
     let (spec, rec) = c
         .test(name)
-        .ok_or_else(|| format!("no {name} test: validation skipped"))?;
+        .ok_or_else(|| IdentifyError::not_usable(format!("no {name} test: validation skipped")))?;
     let fs = c.info.sample_rate_hz;
     let mut p = *params;
     p.controller = c.controller_for(spec);
@@ -46,10 +47,10 @@ pub fn validate(c: &Campaign, name: &str, params: &Params) -> Result<Validation,
         DEFAULT_MAX_SUBSTEP_S,
     );
     let acc: Vec<f64> = sim.iter().map(|o| o.acceleration_m_s2).collect();
-    let w = welch_for(fs, rec.len()).map_err(|e| e.to_string())?;
+    let w = welch_for(fs, rec.len()).map_err(IdentifyError::not_usable)?;
     let simf = w
         .frf(&rec.ref_acceleration_m_s2, &acc)
-        .map_err(|e| e.to_string())?;
+        .map_err(IdentifyError::not_usable)?;
     let nonlinear: Vec<Complex64> = idx.iter().map(|&i| simf.h1[i]).collect();
     // the peak search runs over the validation band only (issue 14, item 9)
     let measured_figures = TfFigures::from_frf(&crate::linear::Frf {
