@@ -11,6 +11,7 @@
 //! are R1, T1-T6, R2, S1/S2/S4/S5/S7/S8, S3/S6/S9, R3 and R2.
 
 mod error;
+mod estimates;
 pub mod frf;
 mod friction;
 pub mod lsq;
@@ -25,6 +26,7 @@ pub mod spool;
 mod validation;
 
 pub use error::IdentifyError;
+pub use estimates::Estimate;
 pub use friction::{bouc_wen_path, fit_friction, fit_triangles};
 pub use mass::{fit_mass, fit_mass_corrected};
 pub use oil_column::fit_oil_column;
@@ -310,102 +312,29 @@ impl Identification {
     /// The JSON of issue 5 (nested objects, fixed keys) with an `uncertainty` object.
     pub fn to_json(&self) -> serde_json::Value {
         use serde_json::{json, Map, Value};
-        let nan = f64::NAN;
-        let num = |x: f64| if x.is_finite() { json!(x) } else { Value::Null };
         let v = self.servovalve.as_ref();
-        let o = self.oil_column.as_ref();
-        let fr = self.friction.as_ref();
         let val = self.validation.as_ref();
         let p = &self.params;
         let mut out = json!({
-            "servovalve": {
-                "gain": num(v.map(|v| v.gain).unwrap_or(nan)),
-                "time_constant_s": num(v.map(|v| v.time_constant_s).unwrap_or(nan)),
-                "natural_frequency_hz": num(v.map(|v| v.natural_frequency_hz).unwrap_or(nan)),
-                "damping_ratio": num(v.map(|v| v.damping_ratio).unwrap_or(nan)),
-                "model": v.map(|v| v.chosen.name()).unwrap_or("unidentified"),
-            },
-            "table": {
-                "mass_kg": num(self.mass_kg.unwrap_or(nan)),
-                "mass_random_kg": num(self.mass_random.as_ref().map(|m| m.mass_kg).unwrap_or(nan)),
-                "mass_periodic_kg": num(self.mass_periodic.as_ref().map(|m| m.mass_kg).unwrap_or(nan)),
-                "stiffness_n_m": num(self.triangles.as_ref().map(|t| t.stiffness_n_m).unwrap_or(nan)),
-            },
-            "oil_column": {
-                "frequency_hz": num(o.map(|o| o.frequency_hz).unwrap_or(nan)),
-                "damping_ratio": num(o.map(|o| o.damping_ratio).unwrap_or(nan)),
-                "bulk_modulus_pa": num(o.map(|o| o.bulk_modulus_pa).unwrap_or(nan)),
-            },
-            "friction": {
-                "force_n": num(fr.map(|f| f.force_n).unwrap_or(nan)),
-                "yield_displacement_m": num(fr.map(|f| f.yield_displacement_m).unwrap_or(nan)),
-                "shape": num(fr.map(|f| f.shape).unwrap_or(nan)),
-            },
-            "validation": {
-                "table_tf_error": num(val.map(|v| v.table_tf_error).unwrap_or(nan)),
-                "table_tf_error_nonlinear": num(val.map(|v| v.table_tf_error_nonlinear).unwrap_or(nan)),
-                "peak_hz": num(val.map(|v| v.peak_hz).unwrap_or(nan)),
-                "measured_peak_hz": num(val.and_then(|v| v.measured_figures).map(|f| f.peak_hz).unwrap_or(nan)),
-                "test": val.map(|v| v.test.clone()),
-            },
-            "actuator": { "model": p.actuator.model.name(), "leakage_m3_s_pa": num(o.map(|o| o.leakage_m3_s_pa).unwrap_or(nan)) },
+            "servovalve": { "model": v.map(|v| v.chosen.name()).unwrap_or("unidentified") },
+            "validation": { "test": val.map(|v| v.test.clone()) },
+            "actuator": { "model": p.actuator.model.name() },
             "missing": self.missing,
             "screening": self.screening,
             "defaults": self.defaults().into_iter().map(|(k, r)| json!({"key": k, "reason": r})).collect::<Vec<_>>(),
         });
         let mut unc = Map::new();
-        let mut put = |block: &str, key: &str, x: Option<f64>| {
-            if let Some(x) = x.filter(|x| x.is_finite()) {
-                let e = unc.entry(block.to_string()).or_insert_with(|| json!({}));
-                e[key] = json!(x);
+        for e in self.estimates() {
+            let (block, key) = e.key.split_once('.').unwrap_or(("", e.key));
+            out[block][key] = e
+                .value
+                .filter(|x| x.is_finite())
+                .map_or(Value::Null, |x| json!(x));
+            if let Some(s) = e.sigma.filter(|s| s.is_finite()) {
+                let entry = unc.entry(block.to_string()).or_insert_with(|| json!({}));
+                entry[key] = json!(s);
             }
-        };
-        put(
-            "servovalve",
-            "natural_frequency_hz",
-            v.map(|v| v.sigma_natural_frequency_hz),
-        );
-        put(
-            "servovalve",
-            "damping_ratio",
-            v.map(|v| v.sigma_damping_ratio),
-        );
-        put(
-            "servovalve",
-            "time_constant_s",
-            v.map(|v| v.sigma_time_constant_s),
-        );
-        put(
-            "table",
-            "mass_random_kg",
-            self.mass_random.as_ref().map(|m| m.sigma_mass_kg),
-        );
-        put(
-            "table",
-            "mass_periodic_kg",
-            self.mass_periodic.as_ref().map(|m| m.sigma_mass_kg),
-        );
-        put(
-            "table",
-            "stiffness_n_m",
-            self.triangles.as_ref().map(|t| t.sigma_stiffness_n_m),
-        );
-        put(
-            "oil_column",
-            "frequency_hz",
-            o.map(|o| o.sigma_frequency_hz),
-        );
-        put(
-            "oil_column",
-            "damping_ratio",
-            o.map(|o| o.sigma_damping_ratio),
-        );
-        put(
-            "oil_column",
-            "bulk_modulus_pa",
-            o.map(|o| o.sigma_bulk_modulus_pa),
-        );
-        put("friction", "force_n", fr.map(|f| f.sigma_force_n));
+        }
         out["uncertainty"] = Value::Object(unc);
         out
     }

@@ -21,9 +21,8 @@ fn heat(x: f64) -> String {
 }
 
 /// Write index.html, README.md and the figures into `dir`.
-pub fn write(dir: &Path, c: &Campaign, d: &Diagnosis) -> anyhow::Result<()> {
-    std::fs::create_dir_all(dir)
-        .map_err(|e| anyhow::anyhow!("{}: cannot create: {e}", dir.display()))?;
+pub fn write(dir: &Path, c: &Campaign, d: &Diagnosis) -> Result<(), super::ReportError> {
+    super::create_dir(dir)?;
     let j = d.to_json();
     let cause = j["cause"].as_str().unwrap_or("none").to_string();
     let mut figures: Vec<(String, String)> = Vec::new();

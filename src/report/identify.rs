@@ -36,9 +36,11 @@ impl Row {
 
 /// The estimates of issue 5's JSON keys with the truth where a parameter file gives it.
 pub fn summary_rows(id: &Identification, truth: Option<&Params>) -> Vec<Row> {
-    let j = id.to_json();
-    let get = |block: &str, key: &str| j[block][key].as_f64().unwrap_or(f64::NAN);
-    let sig = |block: &str, key: &str| j["uncertainty"][block][key].as_f64();
+    // typed estimates, not the JSON read back (a renamed estimate fails `estimate_of`'s
+    // test instead of turning a row into NaN)
+    let estimate = |block: &str, key: &str| estimate_of(id, &format!("{block}.{key}"));
+    let get = |block: &str, key: &str| estimate(block, key).value.unwrap_or(f64::NAN);
+    let sig = |block: &str, key: &str| estimate(block, key).sigma.filter(|s| s.is_finite());
     let oil = truth.map(crate::linear::OilColumn::of);
     let t = |f: &dyn Fn(&Params) -> f64| truth.map(f);
     let valve_order = truth.map(|p| p.servovalve.model);
@@ -165,6 +167,15 @@ pub fn summary_rows(id: &Identification, truth: Option<&Params>) -> Vec<Row> {
     rows
 }
 
+/// The estimate `key` of `id`; every key the report asks for exists (see the test).
+fn estimate_of(id: &Identification, key: &str) -> crate::identify::Estimate {
+    id.estimate(key).unwrap_or(crate::identify::Estimate {
+        key: "unknown",
+        value: None,
+        sigma: None,
+    })
+}
+
 fn fmt(x: f64) -> String {
     if !x.is_finite() {
         "-".into()
@@ -233,9 +244,8 @@ pub fn write(
     id: &Identification,
     rows: &[Row],
     with_truth: bool,
-) -> anyhow::Result<()> {
-    std::fs::create_dir_all(dir)
-        .map_err(|e| anyhow::anyhow!("{}: cannot create: {e}", dir.display()))?;
+) -> Result<(), super::ReportError> {
+    super::create_dir(dir)?;
     let mut sections: Vec<(String, String, String)> = Vec::new(); // (title, figure, text)
     if let Some(v) = &id.servovalve {
         let f = &v.measured.frequency_hz;
@@ -626,4 +636,30 @@ pub fn write(
     html.push_str("</body></html>\n");
     crate::output::atomic_write(&dir.join("index.html"), html.as_bytes())?;
     Ok(())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::campaign::synth::{synthesise, SynthOptions};
+
+    #[test]
+    fn every_report_row_is_an_estimate_and_carries_its_value() {
+        let opts = SynthOptions {
+            random_duration_s: 12.0,
+            tests: Some(vec!["R2".into()]),
+            ..SynthOptions::default()
+        };
+        let id = crate::identify::identify(&synthesise(&Params::trees_lab(), &opts, None));
+        let rows = summary_rows(&id, None);
+        for r in &rows {
+            assert!(id.estimate(r.key).is_some(), "{} is not an estimate", r.key);
+        }
+        let mass = rows
+            .iter()
+            .find(|r| r.key == "table.mass_random_kg")
+            .unwrap();
+        assert!((mass.value / 41_258.0 - 1.0).abs() < 0.05, "{}", mass.value);
+        assert!(mass.sigma.is_some_and(|s| s > 0.0));
+    }
 }

@@ -5,6 +5,28 @@ pub mod diagnose;
 pub mod identify;
 pub mod plot;
 
+/// Why a report could not be written; every variant names the path.
+#[derive(Debug, thiserror::Error)]
+pub enum ReportError {
+    #[error("{path}: cannot create: {source}")]
+    CreateDir {
+        path: String,
+        source: std::io::Error,
+    },
+    #[error(transparent)]
+    Plot(#[from] plot::PlotError),
+    #[error(transparent)]
+    Output(#[from] crate::output::OutputError),
+}
+
+/// Create the report folder `dir`.
+pub(crate) fn create_dir(dir: &std::path::Path) -> Result<(), ReportError> {
+    std::fs::create_dir_all(dir).map_err(|source| ReportError::CreateDir {
+        path: dir.display().to_string(),
+        source,
+    })
+}
+
 /// `s` made safe as HTML text or a quoted attribute value: `& < > " '` escaped. Every
 /// string from outside the program (campaign and test names, file names, messages that
 /// quote them) goes through it before it reaches a page.

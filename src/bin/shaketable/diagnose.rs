@@ -136,7 +136,7 @@ pub fn run(args: Args) -> anyhow::Result<()> {
     outputs.write(
         &(serde_json::to_string_pretty(&j)? + "\n"),
         &d.extended.to_toml_string(),
-        |dir| shaketable::report::diagnose::write(dir, &campaign, &d),
+        |dir| Ok(shaketable::report::diagnose::write(dir, &campaign, &d)?),
     )?;
     Ok(())
 }

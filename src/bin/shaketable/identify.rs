@@ -76,7 +76,14 @@ pub fn run(args: Args) -> anyhow::Result<()> {
     outputs.write(
         &(serde_json::to_string_pretty(&id.to_json())? + "\n"),
         &id.params.to_toml_string(),
-        |dir| shaketable::report::identify::write(dir, &id, &rows, truth.is_some()),
+        |dir| {
+            Ok(shaketable::report::identify::write(
+                dir,
+                &id,
+                &rows,
+                truth.is_some(),
+            )?)
+        },
     )?;
     Ok(())
 }
