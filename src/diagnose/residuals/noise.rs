@@ -1,0 +1,192 @@
+//! The noise floor per channel, estimated from the data (rest segments and the
+//! high-frequency content), never from a generator's settings.
+
+use super::channels::measured;
+use crate::campaign::Campaign;
+use crate::SensorNoise;
+use rand::SeedableRng;
+use rand_chacha::ChaCha8Rng;
+use rand_distr::{Distribution, Normal};
+use serde::Serialize;
+
+/// Noise per channel, estimated from the data (never from a generator's settings).
+#[derive(Debug, Clone, Copy, Serialize)]
+pub struct NoiseFloor {
+    /// The floor, in which residuals are counted: what a noise-free simulation cannot
+    /// predict at rest, i.e. the sensor noise plus the loop's response to it (the
+    /// oil-column resonance makes the latter several times the former in acceleration
+    /// and force). Displacement (LVDT), m.
+    pub displacement_m: f64,
+    pub acceleration_m_s2: f64,
+    pub force_n: f64,
+    pub spool: f64,
+    /// The command at rest: the controller's response to the feedback noise (the
+    /// command itself is recorded without measurement noise).
+    pub valve_command: f64,
+    /// The sensor noise alone (white), which the noisy runs of [`predict`] feed into the
+    /// loop and which bounds every window's predicted spread from below.
+    pub sensor: SensorLevels,
+    /// How it was estimated.
+    pub method: &'static str,
+}
+
+/// White sensor-noise RMS of the measured channels.
+#[derive(Debug, Clone, Copy, Serialize)]
+pub struct SensorLevels {
+    pub displacement_m: f64,
+    pub acceleration_m_s2: f64,
+    pub force_n: f64,
+    pub spool: f64,
+}
+
+impl NoiseFloor {
+    /// Noise floor of channel `ch` of [`CHANNELS`] (the residual's unit).
+    pub fn of(&self, ch: usize) -> f64 {
+        [
+            self.displacement_m,
+            self.acceleration_m_s2,
+            self.force_n,
+            self.spool,
+            self.valve_command,
+        ][ch]
+    }
+
+    /// Measurement noise of channel `ch` alone (the command has none: its spread is the
+    /// loop's response, which the noisy run predicts).
+    pub fn measurement(&self, ch: usize) -> f64 {
+        let s = &self.sensor;
+        [
+            s.displacement_m,
+            s.acceleration_m_s2,
+            s.force_n,
+            s.spool,
+            0.0,
+        ][ch]
+    }
+
+    /// Seeded sensor noise at the sensor levels for a record of `n` samples (the feedback
+    /// channels only, as on the table; spec section 2).
+    pub fn loop_noise(&self, n: usize, seed: u64) -> Vec<SensorNoise> {
+        let mut rng = ChaCha8Rng::seed_from_u64(seed);
+        let normal = Normal::new(0.0, 1.0).expect("unit normal");
+        let s = &self.sensor;
+        (0..n)
+            .map(|_| SensorNoise {
+                displacement_m: s.displacement_m * normal.sample(&mut rng),
+                acceleration_m_s2: s.acceleration_m_s2 * normal.sample(&mut rng),
+                force_n: s.force_n * normal.sample(&mut rng),
+            })
+            .collect()
+    }
+}
+
+pub(super) fn std_dev(x: &[f64]) -> f64 {
+    let n = x.len().max(1) as f64;
+    let m = x.iter().sum::<f64>() / n;
+    (x.iter().map(|v| (v - m).powi(2)).sum::<f64>() / n).sqrt()
+}
+
+pub(super) fn median(mut v: Vec<f64>) -> f64 {
+    v.retain(|x| x.is_finite());
+    if v.is_empty() {
+        return f64::NAN;
+    }
+    v.sort_by(f64::total_cmp);
+    v[v.len() / 2]
+}
+
+/// White-noise RMS from the fourth difference: its variance is 70 times the noise's
+/// (binomial(8, 4)), while a signal at 14 Hz sampled at 512 Hz is attenuated to 8e-4 of
+/// its amplitude, so slow motion and the oil-column chatter do not leak in.
+pub(super) fn fourth_difference_rms(x: &[f64]) -> f64 {
+    if x.len() < 16 {
+        return f64::NAN;
+    }
+    let d: Vec<f64> = x
+        .windows(5)
+        .map(|w| w[0] - 4.0 * w[1] + 6.0 * w[2] - 4.0 * w[3] + w[4])
+        .collect();
+    std_dev(&d) / 70f64.sqrt()
+}
+
+/// Noise of every channel, from the data only. The floor: the rest segments (zero
+/// reference) at the start of the tests, median over tests. The sensor noise: the
+/// high-frequency content (fourth difference, median over tests), which the loop's
+/// response (below 50 Hz) does not reach. Without a rest segment of 64 samples or more
+/// in any test, the floor is the sensor noise (and the command's from the gains).
+pub fn estimate_noise(c: &Campaign) -> NoiseFloor {
+    let mut rest_est: [Vec<f64>; 5] = Default::default();
+    let mut hf_est: [Vec<f64>; 4] = Default::default();
+    for r in &c.records {
+        let rest = (0..r.len())
+            .take_while(|&k| {
+                r.ref_displacement_m[k] == 0.0
+                    && r.ref_velocity_m_s[k] == 0.0
+                    && r.ref_acceleration_m_s2[k] == 0.0
+            })
+            .count();
+        for ch in 0..5 {
+            if let Some(m) = measured(r, ch) {
+                if ch < 4 {
+                    hf_est[ch].push(fourth_difference_rms(m));
+                }
+                if rest >= 64 {
+                    rest_est[ch].push(std_dev(&m[..rest]));
+                }
+            }
+        }
+    }
+    let hf: Vec<f64> = hf_est.iter().map(|v| median(v.clone())).collect();
+    let rest: Vec<f64> = rest_est.iter().map(|v| median(v.clone())).collect();
+    let have_rest = rest[0].is_finite();
+    let method = if have_rest {
+        "floor from the rest segments (zero reference) at the start of the tests; sensor noise from the high-frequency content"
+    } else {
+        "floor and sensor noise from the high-frequency content (fourth difference; no rest segment)"
+    };
+    // floors so that a noise-free record does not divide by zero
+    let lower = [1e-9, 1e-6, 1e-3, 1e-7];
+    let sensor: Vec<f64> = (0..4)
+        .map(|ch| {
+            if hf[ch].is_finite() {
+                hf[ch].max(lower[ch])
+            } else {
+                f64::NAN
+            }
+        })
+        .collect();
+    // the floor is never below the sensor noise
+    let floor: Vec<f64> = (0..4)
+        .map(|ch| {
+            if have_rest && rest[ch].is_finite() {
+                rest[ch].max(sensor[ch])
+            } else {
+                sensor[ch]
+            }
+        })
+        .collect();
+    let k = &c.info.controller;
+    let from_gains =
+        ((k.kp * sensor[0]).powi(2) + (k.ka * sensor[1]).powi(2) + (k.kdp * sensor[2]).powi(2))
+            .sqrt();
+    let su = if have_rest && rest[4].is_finite() {
+        rest[4].max(from_gains)
+    } else {
+        from_gains
+    }
+    .max(1e-7);
+    NoiseFloor {
+        displacement_m: floor[0],
+        acceleration_m_s2: floor[1],
+        force_n: floor[2],
+        spool: floor[3],
+        valve_command: su,
+        sensor: SensorLevels {
+            displacement_m: sensor[0],
+            acceleration_m_s2: sensor[1],
+            force_n: sensor[2],
+            spool: sensor[3],
+        },
+        method,
+    }
+}

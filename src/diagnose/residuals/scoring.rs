@@ -1,0 +1,213 @@
+//! The predictive score per test and channel: octave bands, windows, the Gaussian log
+//! score of the residual power under the predicted spread.
+
+use super::channels::{measured, simulated, CHANNELS};
+use super::noise::NoiseFloor;
+use super::prediction::{predict, Prediction};
+use super::spectral::{band_split, octave_bands};
+use super::whitening::white_variance;
+use super::Part;
+use crate::campaign::{Campaign, Record};
+use crate::params::Params;
+
+/// Window of the predictive score, samples (0.25 s at 512 Hz: short beside a chatter
+/// burst's growth, long enough for a power estimate within about 12 %).
+pub const SCORE_WINDOW: usize = 128;
+
+/// Windows over which the predicted spread is averaged (centred; 1.25 s at 512 Hz).
+pub const SPREAD_WINDOWS: usize = 5;
+
+/// Held-out figures of a model per channel (NaN where the channel is absent, infinite
+/// where the run diverged).
+#[derive(Debug, Clone, Copy)]
+pub struct CellScores {
+    /// The predictive score as an equivalent noise ratio: the square root of the mean over
+    /// windows of `P_meas/P_pred + ln(P_pred/s^2)` (module doc). It ranks models.
+    pub score: [f64; 5],
+    /// The standardised residual: the square root of the mean of `P_meas/P_pred`, the
+    /// residual in units of the spread the model itself predicts (the noise floor for a
+    /// model the noise does not excite, where both equal the ratio of [`ratios`]).
+    pub residual: [f64; 5],
+}
+
+/// Degrees of freedom a score window holds in its band (`2 W L / fs`): its length is
+/// chosen for it (at least [`SCORE_WINDOW`]), so a narrow low band gets long windows.
+pub(super) const WINDOW_DOF: f64 = 8.0;
+
+/// Mean over windows of `P_meas/P_pred` and of `ln(P_pred/reference)` for one band:
+/// `meas` the band's residual, `spread` its predicted spread per realisation, `white` the
+/// variance of independent measurement noise in the band (added to the prediction).
+pub fn band_score(meas: &[f64], spread: &[Vec<f64>], window: usize, white: f64) -> (f64, f64) {
+    let n = meas.len();
+    let starts: Vec<usize> = (0..n).step_by(window.max(1)).collect();
+    let power = |x: &[f64], k0: usize| {
+        let end = (k0 + window).min(n);
+        (x[k0..end].iter().map(|v| v * v).sum::<f64>(), end - k0)
+    };
+    let meas_p: Vec<(f64, usize)> = starts.iter().map(|&k0| power(meas, k0)).collect();
+    let spread_p: Vec<(f64, usize)> = starts
+        .iter()
+        .map(|&k0| {
+            spread.iter().fold((0.0, 0), |acc, s| {
+                let (p, m) = power(s, k0);
+                (acc.0 + p, acc.1 + m)
+            })
+        })
+        .collect();
+    let half = SPREAD_WINDOWS / 2;
+    let (mut ratio, mut log, mut total) = (0.0, 0.0, 0usize);
+    for (w, &(pm, m)) in meas_p.iter().enumerate() {
+        let lo = w.saturating_sub(half);
+        let hi = (w + half + 1).min(spread_p.len());
+        let (ps, ns) = spread_p[lo..hi]
+            .iter()
+            .fold((0.0, 0usize), |a, b| (a.0 + b.0, a.1 + b.1));
+        let p_pred = (white + ps / ns.max(1) as f64).max(f64::MIN_POSITIVE);
+        ratio += pm / p_pred;
+        log += p_pred.ln() * m as f64;
+        total += m;
+    }
+    let t = total.max(1) as f64;
+    (ratio / t, log / t)
+}
+
+/// [`CellScores`] of a prediction over `part`: per channel, the residual (measured minus
+/// the locked run) and the predicted spread (noisy run plus the very noise its feedback
+/// saw, minus the locked run: the recorded channels carry the noise the controller saw, so
+/// the loop's response and the noise add coherently) are split into octave bands; each
+/// band is scored in windows of [`WINDOW_DOF`] degrees of freedom, the predicted power
+/// smoothed over [`SPREAD_WINDOWS`] windows; the cell is the mean over bands.
+///
+/// Why bands: the loop's noise response fills the oil-column octave, and a residual that
+/// lives in another octave (a stiff foundation's mode at 30-40 Hz, a hundred times the
+/// predicted power there) would vanish in a broadband power that the resonance
+/// dominates. Each octave counts alike, as on a Bode plot. Summed over bands with fixed
+/// weights, the Gaussian log score stays a proper scoring rule.
+pub fn scores(
+    r: &Record,
+    pred: &Prediction,
+    noise: &NoiseFloor,
+    part: Part,
+    sample_rate_hz: f64,
+) -> CellScores {
+    let mut out = CellScores {
+        score: [f64::NAN; 5],
+        residual: [f64::NAN; 5],
+    };
+    let range = part.range(r.len());
+    if range.len() < 2 {
+        return out;
+    }
+    let bands = octave_bands(sample_rate_hz);
+    let nyquist = sample_rate_hz / 2.0;
+    for ch in 0..CHANNELS.len() {
+        let Some(m) = measured(r, ch) else { continue };
+        let s = noise.of(ch);
+        if !s.is_finite() {
+            continue;
+        }
+        let white = white_variance(noise, ch);
+        let locked = |k: usize| simulated(&pred.locked[k], ch);
+        let residual: Vec<f64> = range.clone().map(|k| m[k] - locked(k)).collect();
+        let spread = pred.spread(range.clone(), ch);
+        // a run that diverged ([`crate::solver::simulate_record`] marks it NaN) predicts
+        // nothing: an infinite score, never a cell left out as if the channel were absent
+        if residual
+            .iter()
+            .chain(spread.iter().flatten())
+            .any(|x| !x.is_finite())
+        {
+            out.score[ch] = f64::INFINITY;
+            out.residual[ch] = f64::INFINITY;
+            continue;
+        }
+        let meas_bands = band_split(&residual, &bands, sample_rate_hz);
+        let spread_bands: Vec<Vec<Vec<f64>>> = spread
+            .iter()
+            .map(|x| band_split(x, &bands, sample_rate_hz))
+            .collect();
+        let (mut score, mut ratio) = (0.0, 0.0);
+        for (b, &(lo, hi)) in bands.iter().enumerate() {
+            let width = hi - lo;
+            let window =
+                ((WINDOW_DOF * sample_rate_hz / (2.0 * width)).ceil() as usize).max(SCORE_WINDOW);
+            let share = width / nyquist;
+            let sp: Vec<Vec<f64>> = spread_bands.iter().map(|x| x[b].clone()).collect();
+            let (q, log) = band_score(&meas_bands[b], &sp, window, white * share);
+            // the log term relative to the floor's share of the band, so that a model
+            // predicting the floor scores as the ratio alone
+            score += q + log - (s * s * share).ln();
+            ratio += q;
+        }
+        let nb = bands.len() as f64;
+        out.score[ch] = (score / nb).max(0.0).sqrt();
+        out.residual[ch] = (ratio / nb).sqrt();
+    }
+    out
+}
+
+/// [`CellScores`] of `p` on test `i` over `part` (one [`predict`] and [`scores`]).
+pub fn test_scores(
+    p: &Params,
+    c: &Campaign,
+    i: usize,
+    part: Part,
+    noise: &NoiseFloor,
+) -> CellScores {
+    test_scores_held(p, c, i, part, noise, false)
+}
+
+/// [`test_scores`] of a trial model held to the operating envelope (spec section 8):
+/// where its noise-free run leaves the envelope over `part`, while the measured table did
+/// not, the model describes nothing real there and every cell of the test scores
+/// infinitely bad. (The fits themselves run with the divergence guards only,
+/// [`simulate_test_with`], so an optimiser keeps a finite cost on its way.)
+pub fn test_scores_in_envelope(
+    p: &Params,
+    c: &Campaign,
+    i: usize,
+    part: Part,
+    noise: &NoiseFloor,
+) -> CellScores {
+    test_scores_held(p, c, i, part, noise, true)
+}
+
+pub(super) fn test_scores_held(
+    p: &Params,
+    c: &Campaign,
+    i: usize,
+    part: Part,
+    noise: &NoiseFloor,
+    to_envelope: bool,
+) -> CellScores {
+    let pred = predict(p, c, i, part.simulated(), noise);
+    let range = part.range(c.records[i].len());
+    let locked = &pred.locked[range.start..range.end.min(pred.locked.len())];
+    if to_envelope && crate::model::limits::first_exceeded(p, locked).is_some() {
+        return CellScores {
+            score: [f64::INFINITY; 5],
+            residual: [f64::INFINITY; 5],
+        };
+    }
+    scores(&c.records[i], &pred, noise, part, c.info.sample_rate_hz)
+}
+
+/// Sum over `tests` and channels of the squared predictive scores over `part`: the
+/// objective of the fits that cannot use sample-wise least squares (stick-slip).
+pub fn score_sum(p: &Params, c: &Campaign, tests: &[usize], noise: &NoiseFloor, part: Part) -> f64 {
+    use rayon::prelude::*;
+    if p.validate().is_err() {
+        return f64::INFINITY;
+    }
+    tests
+        .par_iter()
+        .map(|&i| {
+            test_scores(p, c, i, part, noise)
+                .score
+                .iter()
+                .filter(|x| !x.is_nan())
+                .map(|x| x * x)
+                .sum::<f64>()
+        })
+        .sum::<f64>()
+}
