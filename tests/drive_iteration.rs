@@ -6,7 +6,7 @@
 use rand::SeedableRng;
 use rand_chacha::ChaCha8Rng;
 use rand_distr::{Distribution, Normal};
-use shaketable::model::{Inputs, Model, Reference, SensorNoise};
+use shaketable::model::{Model, SensorNoise};
 use shaketable::motion::drive::{offline, online, DriveOptions, Previous};
 use shaketable::motion::metrics::{metrics, Metrics};
 use shaketable::motion::prepare::{prepare, PrepareOptions, Target};
@@ -48,16 +48,7 @@ fn lab_run(lab: &Params, drive: &Target, seed: u64, accel_noise: f64, delay: usi
             force_n: 200.0 * normal.sample(&mut rng),
         })
         .collect();
-    let inputs: Vec<Inputs> = (0..n)
-        .map(|k| Inputs {
-            reference: Reference {
-                displacement_m: drive.displacement_m[k],
-                velocity_m_s: drive.velocity_m_s[k],
-                acceleration_m_s2: drive.acceleration_m_s2[k],
-            },
-            external_force_n: 0.0,
-        })
-        .collect();
+    let inputs = drive.inputs();
     let run = simulate_run(
         &Model::new(lab),
         &inputs,

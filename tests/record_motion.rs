@@ -3,7 +3,7 @@
 //! file, checked against the envelope, and the check's demands compared with a
 //! simulation of the table following the target.
 
-use shaketable::model::{Inputs, Model, Reference};
+use shaketable::model::Model;
 use shaketable::motion::envelope::check_target;
 use shaketable::motion::prepare::Target;
 use shaketable::motion::target_file::read_target;
@@ -166,16 +166,7 @@ fn the_check_demands_are_what_the_simulated_table_needed() {
     let params = with_specimen(&dir);
     let p = Params::from_file(&params).unwrap();
     let t = read_target(&target).unwrap();
-    let inputs: Vec<Inputs> = (0..t.acceleration_m_s2.len())
-        .map(|k| Inputs {
-            reference: Reference {
-                displacement_m: t.displacement_m[k],
-                velocity_m_s: t.velocity_m_s[k],
-                acceleration_m_s2: t.acceleration_m_s2[k],
-            },
-            external_force_n: 0.0,
-        })
-        .collect();
+    let inputs = t.inputs();
     let run = simulate_run(
         &Model::new(&p),
         &inputs,

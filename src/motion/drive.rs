@@ -11,7 +11,7 @@ use super::metrics::{metrics, Metrics};
 use super::prepare::{peak, Target};
 use super::transfer::{fft, ifft, Transfer};
 use super::MotionError;
-use crate::model::{Inputs, Model, Outputs, Reference};
+use crate::model::{Model, Outputs};
 use crate::params::Params;
 use crate::solver::{simulate_run, DEFAULT_MAX_SUBSTEP_S};
 use realfft::num_complex::Complex;
@@ -123,17 +123,13 @@ fn lead_in(target: &Target) -> usize {
 /// The model's response to `drive`; an error naming the time and the limit if the run
 /// leaves the operating envelope.
 pub fn play(model: &Model, drive: &Drive) -> Result<Vec<Outputs>, MotionError> {
-    let inputs: Vec<Inputs> = (0..drive.acceleration_m_s2.len())
-        .map(|k| Inputs {
-            reference: Reference {
-                displacement_m: drive.displacement_m[k],
-                velocity_m_s: drive.velocity_m_s[k],
-                acceleration_m_s2: drive.acceleration_m_s2[k],
-            },
-            external_force_n: 0.0,
-        })
-        .collect();
-    let run = simulate_run(model, &inputs, drive.rate_hz, None, DEFAULT_MAX_SUBSTEP_S);
+    let run = simulate_run(
+        model,
+        &drive.inputs(),
+        drive.rate_hz,
+        None,
+        DEFAULT_MAX_SUBSTEP_S,
+    );
     match run.stop {
         Some(stop) => Err(MotionError::Option {
             option: "drive".into(),
@@ -431,19 +427,7 @@ pub fn check_drive(p: &Params, r: &DriveResult) -> Result<(), MotionError> {
         displacement_m: series(|o| o.displacement_m),
     };
     let c = super::envelope::check_target(p, &motion);
-    let mut over: Vec<String> = c
-        .demands
-        .iter()
-        .filter(|d| d.fraction > 1.0)
-        .map(|d| {
-            format!(
-                "{} {:.0} % of its limit at {:.2} s",
-                d.name,
-                100.0 * d.fraction,
-                d.at_time_s
-            )
-        })
-        .collect();
+    let mut over = c.exceeded();
     let stroke = peak(&r.drive.displacement_m);
     if stroke > p.limits.stroke_m {
         over.push(format!(

@@ -96,6 +96,24 @@ pub fn check_target(p: &Params, target: &Target) -> EnvelopeCheck {
     }
 }
 
+impl EnvelopeCheck {
+    /// Each demand beyond its limit, as "`name` N % of its limit at T s".
+    pub fn exceeded(&self) -> Vec<String> {
+        self.demands
+            .iter()
+            .filter(|d| d.fraction > 1.0)
+            .map(|d| {
+                format!(
+                    "{} {:.0} % of its limit at {:.2} s",
+                    d.name,
+                    100.0 * d.fraction,
+                    d.at_time_s
+                )
+            })
+            .collect()
+    }
+}
+
 fn valve_limit_text(p: &Params) -> String {
     let mut s = String::from("the spool fully open");
     if p.actuator.model == ActuatorModel::Nonlinear {

@@ -162,6 +162,20 @@ impl Target {
         }
     }
 
+    /// The model's inputs with this motion as the reference (no external force).
+    pub fn inputs(&self) -> Vec<crate::model::Inputs> {
+        (0..self.acceleration_m_s2.len())
+            .map(|k| crate::model::Inputs {
+                reference: crate::model::Reference {
+                    displacement_m: self.displacement_m[k],
+                    velocity_m_s: self.velocity_m_s[k],
+                    acceleration_m_s2: self.acceleration_m_s2[k],
+                },
+                external_force_n: 0.0,
+            })
+            .collect()
+    }
+
     /// Seconds from the first sample to the last.
     pub fn duration_s(&self) -> f64 {
         self.acceleration_m_s2.len().saturating_sub(1) as f64 / self.rate_hz

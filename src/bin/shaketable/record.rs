@@ -244,19 +244,7 @@ fn check(a: CheckArgs) -> anyhow::Result<()> {
         println!("wrote {}", j.display());
     }
     if !c.within {
-        let over: Vec<String> = c
-            .demands
-            .iter()
-            .filter(|d| d.fraction > 1.0)
-            .map(|d| {
-                format!(
-                    "{} {:.0} % of its limit at {:.2} s",
-                    d.name,
-                    100.0 * d.fraction,
-                    d.at_time_s
-                )
-            })
-            .collect();
+        let over = c.exceeded();
         anyhow::bail!(
             "{} leaves the table's envelope: {}",
             a.target.display(),
