@@ -2,8 +2,10 @@
 //! description, and how each reads/writes the model's parameters or signals.
 //! `modelDescription.xml` and the documentation page are generated from it.
 
+use crate::effects::{Effect, CATALOGUE};
 use crate::model::{Inputs, Outputs};
 use crate::params::{ActuatorModel, Params, ServovalveModel};
+use std::sync::LazyLock;
 
 /// FMI type of a variable.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -103,19 +105,6 @@ macro_rules! real_param {
     };
 }
 
-macro_rules! bool_param {
-    ($vr:expr, $name:expr, $desc:expr, $($field:ident).+) => {
-        Variable {
-            vr: $vr,
-            name: $name,
-            kind: Kind::Boolean,
-            role: Role::Parameter(|p| if p.$($field).+ { 1.0 } else { 0.0 }, |p, v| p.$($field).+ = v != 0.0),
-            unit: None,
-            description: $desc,
-        }
-    };
-}
-
 macro_rules! output {
     ($vr:expr, $name:expr, $unit:expr, $desc:expr, $field:ident) => {
         Variable {
@@ -129,8 +118,42 @@ macro_rules! output {
     };
 }
 
-/// Every variable of the FMU, in modelDescription order.
-pub static VARIABLES: &[Variable] = &[
+/// Every variable of the FMU, in modelDescription order: the table's own, then each
+/// catalogue effect's switch and parameters ([`crate::effects::CATALOGUE`]), then the
+/// operating limits.
+pub static VARIABLES: LazyLock<Vec<Variable>> = LazyLock::new(|| {
+    let mut rows = TABLE_VARIABLES.to_vec();
+    for effect in &CATALOGUE {
+        rows.extend(effect_variables(effect));
+    }
+    rows.extend_from_slice(LIMIT_VARIABLES);
+    rows
+});
+
+/// The FMU rows of one effect (spec section 7): its Boolean switch, then its parameters.
+fn effect_variables(effect: &Effect) -> Vec<Variable> {
+    let switch = &effect.switch;
+    let mut rows = vec![Variable {
+        vr: switch.value_reference,
+        name: switch.fmu_name,
+        kind: Kind::Boolean,
+        role: Role::Parameter(switch.read, switch.write),
+        unit: None,
+        description: switch.description,
+    }];
+    rows.extend(effect.parameters.iter().map(|q| Variable {
+        vr: q.value_reference,
+        name: q.fmu_name,
+        kind: Kind::Real,
+        role: Role::Parameter(q.read, q.write),
+        unit: q.unit,
+        description: q.description,
+    }));
+    rows
+}
+
+/// The rows before the effects'.
+static TABLE_VARIABLES: &[Variable] = &[
     // inputs (continuous; linear interpolation over a step with fmi2SetRealInputDerivatives)
     Variable {
         vr: 0,
@@ -408,107 +431,10 @@ pub static VARIABLES: &[Variable] = &[
         "Bouc-Wen shape constant b in [0, 1)",
         friction.shape
     ),
-    // effects (spec section 7)
-    bool_param!(
-        140,
-        "specimen.enabled",
-        "Flexible SDOF specimen on the table",
-        specimen.enabled
-    ),
-    real_param!(
-        141,
-        "specimen.mass",
-        Some("kg"),
-        "Specimen mass",
-        specimen.mass_kg
-    ),
-    real_param!(
-        142,
-        "specimen.frequency",
-        Some("Hz"),
-        "Specimen natural frequency",
-        specimen.frequency_hz
-    ),
-    real_param!(
-        143,
-        "specimen.damping_ratio",
-        None,
-        "Specimen damping ratio",
-        specimen.damping_ratio
-    ),
-    bool_param!(
-        150,
-        "foundation.enabled",
-        "Compliant reaction mass",
-        foundation.enabled
-    ),
-    real_param!(
-        151,
-        "foundation.mass",
-        Some("kg"),
-        "Reaction mass M_f",
-        foundation.mass_kg
-    ),
-    real_param!(
-        152,
-        "foundation.frequency",
-        Some("Hz"),
-        "Foundation natural frequency (M_f alone)",
-        foundation.frequency_hz
-    ),
-    real_param!(
-        153,
-        "foundation.damping_ratio",
-        None,
-        "Foundation damping ratio",
-        foundation.damping_ratio
-    ),
-    bool_param!(
-        160,
-        "stick_slip.enabled",
-        "Static friction above kinetic friction (Stribeck)",
-        stick_slip.enabled
-    ),
-    real_param!(
-        161,
-        "stick_slip.static_ratio",
-        None,
-        "Static to kinetic friction ratio r_s",
-        stick_slip.static_ratio
-    ),
-    real_param!(
-        162,
-        "stick_slip.stribeck_velocity",
-        Some("m/s"),
-        "Stribeck velocity v_s",
-        stick_slip.stribeck_velocity_m_s
-    ),
-    bool_param!(
-        170,
-        "flow_saturation.enabled",
-        "Bounded valve flow",
-        flow_saturation.enabled
-    ),
-    real_param!(
-        171,
-        "flow_saturation.max_flow",
-        Some("m3/s"),
-        "Largest flow Q_max",
-        flow_saturation.max_flow_m3_s
-    ),
-    bool_param!(
-        180,
-        "valve_deadband.enabled",
-        "Spool overlap (no flow inside the band)",
-        valve_deadband.enabled
-    ),
-    real_param!(
-        181,
-        "valve_deadband.deadband",
-        None,
-        "Deadband d (fraction of full spool)",
-        valve_deadband.deadband
-    ),
+];
+
+/// The rows after the effects'.
+static LIMIT_VARIABLES: &[Variable] = &[
     // operating limits (spec section 8): fmi2DoStep stops beyond them with fmi2Error
     real_param!(
         190,
@@ -580,7 +506,7 @@ mod tests {
     /// Every parameter round-trips through its setter and changes the parameter file.
     #[test]
     fn every_parameter_reads_and_writes_its_block() {
-        for v in VARIABLES {
+        for v in VARIABLES.iter() {
             if let Role::Parameter(get, set) = v.role {
                 let mut p = Params::trees_lab();
                 let x = get(&p);
