@@ -132,6 +132,27 @@ pub fn by_name(name: &str) -> Option<&'static Effect> {
     CATALOGUE.iter().find(|e| e.name == name)
 }
 
+/// The effects and their parameters for the `--effect` help: one line per effect,
+/// `name: key (unit, default value), ...`.
+pub fn effect_syntax_help() -> String {
+    let defaults = Params::trees_lab();
+    let lines: Vec<String> = CATALOGUE
+        .iter()
+        .map(|e| {
+            let keys: Vec<String> = e
+                .parameters
+                .iter()
+                .map(|q| {
+                    let unit = q.unit.map(|u| format!("{u}, ")).unwrap_or_default();
+                    format!("{} ({unit}default {})", q.key, (q.read)(&defaults))
+                })
+                .collect();
+            format!("  {}: {}", e.name, keys.join(", "))
+        })
+        .collect();
+    lines.join("\n")
+}
+
 impl Effect {
     /// Whether the effect is switched on in `p`.
     pub fn is_enabled(&self, p: &Params) -> bool {
