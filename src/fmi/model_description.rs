@@ -106,7 +106,7 @@ pub fn model_description_xml(p: &Params) -> String {
     de.push_attribute(("stepSize", "0.001953125"));
     put(Event::Empty(de));
     put(Event::Start(BytesStart::new("ModelVariables")));
-    for v in VARIABLES.iter() {
+    for v in VARIABLES {
         let mut e = BytesStart::new("ScalarVariable");
         e.push_attribute(("name", v.name));
         e.push_attribute(("valueReference", v.vr.to_string().as_str()));
@@ -173,7 +173,7 @@ pub fn documentation_html(p: &Params) -> String {
          fixed: set them before fmi2ExitInitializationMode.</p><table><tr><th>vr</th><th>name</th>\
          <th>causality</th><th>type</th><th>unit</th><th>start</th><th>description</th></tr>",
     );
-    for v in VARIABLES.iter() {
+    for v in VARIABLES {
         let causality = match v.role {
             Role::Input(_) => "input",
             Role::Output(_) => "output",

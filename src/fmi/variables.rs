@@ -2,10 +2,9 @@
 //! description, and how each reads/writes the model's parameters or signals.
 //! `modelDescription.xml` and the documentation page are generated from it.
 
-use crate::effects::{Effect, CATALOGUE};
+use crate::effects::CATALOGUE;
 use crate::model::{Inputs, Outputs};
 use crate::params::{ActuatorModel, Params, ServovalveModel};
-use std::sync::LazyLock;
 
 /// FMI type of a variable.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -120,40 +119,75 @@ macro_rules! output {
 
 /// Every variable of the FMU, in modelDescription order: the table's own, then each
 /// catalogue effect's switch and parameters ([`crate::effects::CATALOGUE`]), then the
-/// operating limits.
-pub static VARIABLES: LazyLock<Vec<Variable>> = LazyLock::new(|| {
-    let mut rows = TABLE_VARIABLES.to_vec();
-    for effect in &CATALOGUE {
-        rows.extend(effect_variables(effect));
-    }
-    rows.extend_from_slice(LIMIT_VARIABLES);
-    rows
-});
+/// operating limits. Built at compile time from the three parts.
+pub static VARIABLES: &[Variable] = &ALL_VARIABLES;
 
-/// The FMU rows of one effect (spec section 7): its Boolean switch, then its parameters.
-fn effect_variables(effect: &Effect) -> Vec<Variable> {
-    let switch = &effect.switch;
-    let mut rows = vec![Variable {
-        vr: switch.value_reference,
-        name: switch.fmu_name,
-        kind: Kind::Boolean,
-        role: Role::Parameter(switch.read, switch.write),
-        unit: None,
-        description: switch.description,
-    }];
-    rows.extend(effect.parameters.iter().map(|q| Variable {
-        vr: q.value_reference,
-        name: q.fmu_name,
-        kind: Kind::Real,
-        role: Role::Parameter(q.read, q.write),
-        unit: q.unit,
-        description: q.description,
-    }));
+/// Number of FMU rows the catalogue's effects declare (a switch plus its parameters each).
+const fn effect_row_count() -> usize {
+    let mut n = 0;
+    let mut i = 0;
+    while i < CATALOGUE.len() {
+        n += 1 + CATALOGUE[i].parameters.len();
+        i += 1;
+    }
+    n
+}
+
+const ROW_COUNT: usize = TABLE_VARIABLES.len() + effect_row_count() + LIMIT_VARIABLES.len();
+
+const ALL_VARIABLES: [Variable; ROW_COUNT] = all_variables();
+
+/// The table's rows, then per effect its Boolean switch and its Real parameters, then the
+/// limits.
+const fn all_variables() -> [Variable; ROW_COUNT] {
+    let mut rows = [TABLE_VARIABLES[0]; ROW_COUNT];
+    let mut n = 0;
+    let mut i = 0;
+    while i < TABLE_VARIABLES.len() {
+        rows[n] = TABLE_VARIABLES[i];
+        n += 1;
+        i += 1;
+    }
+    let mut e = 0;
+    while e < CATALOGUE.len() {
+        let effect = &CATALOGUE[e];
+        let switch = &effect.switch;
+        rows[n] = Variable {
+            vr: switch.value_reference,
+            name: switch.fmu_name,
+            kind: Kind::Boolean,
+            role: Role::Parameter(switch.read, switch.write),
+            unit: None,
+            description: switch.description,
+        };
+        n += 1;
+        let mut k = 0;
+        while k < effect.parameters.len() {
+            let q = &effect.parameters[k];
+            rows[n] = Variable {
+                vr: q.value_reference,
+                name: q.fmu_name,
+                kind: Kind::Real,
+                role: Role::Parameter(q.read, q.write),
+                unit: q.unit,
+                description: q.description,
+            };
+            n += 1;
+            k += 1;
+        }
+        e += 1;
+    }
+    let mut i = 0;
+    while i < LIMIT_VARIABLES.len() {
+        rows[n] = LIMIT_VARIABLES[i];
+        n += 1;
+        i += 1;
+    }
     rows
 }
 
 /// The rows before the effects'.
-static TABLE_VARIABLES: &[Variable] = &[
+const TABLE_VARIABLES: &[Variable] = &[
     // inputs (continuous; linear interpolation over a step with fmi2SetRealInputDerivatives)
     Variable {
         vr: 0,
@@ -434,7 +468,7 @@ static TABLE_VARIABLES: &[Variable] = &[
 ];
 
 /// The rows after the effects'.
-static LIMIT_VARIABLES: &[Variable] = &[
+const LIMIT_VARIABLES: &[Variable] = &[
     // operating limits (spec section 8): fmi2DoStep stops beyond them with fmi2Error
     real_param!(
         190,
@@ -506,7 +540,7 @@ mod tests {
     /// Every parameter round-trips through its setter and changes the parameter file.
     #[test]
     fn every_parameter_reads_and_writes_its_block() {
-        for v in VARIABLES.iter() {
+        for v in VARIABLES {
             if let Role::Parameter(get, set) = v.role {
                 let mut p = Params::trees_lab();
                 let x = get(&p);
