@@ -7,6 +7,7 @@
 pub mod benchmark;
 pub mod campaign;
 pub mod diagnose;
+pub mod effects;
 pub mod fmi;
 pub mod identify;
 pub mod linear;

@@ -5,6 +5,7 @@
 //! key takes its TREES Lab default. An unknown key is an error (it is nearly always a typo
 //! that would otherwise be silently ignored).
 
+use crate::effects::CATALOGUE;
 use serde::{Deserialize, Serialize};
 use std::path::Path;
 
@@ -209,103 +210,11 @@ impl Default for Friction {
     }
 }
 
-/// Flexible SDOF specimen on the table (spec section 7, `specimen`).
-#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
-#[serde(default, deny_unknown_fields)]
-pub struct Specimen {
-    pub enabled: bool,
-    pub mass_kg: f64,
-    pub frequency_hz: f64,
-    pub damping_ratio: f64,
-}
-
-impl Default for Specimen {
-    fn default() -> Self {
-        Specimen {
-            enabled: false,
-            mass_kg: 10_000.0,
-            frequency_hz: 5.0,
-            damping_ratio: 0.02,
-        }
-    }
-}
-
-/// Compliant reaction mass (spec section 7, `foundation`).
-#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
-#[serde(default, deny_unknown_fields)]
-pub struct Foundation {
-    pub enabled: bool,
-    pub mass_kg: f64,
-    pub frequency_hz: f64,
-    pub damping_ratio: f64,
-}
-
-impl Default for Foundation {
-    fn default() -> Self {
-        Foundation {
-            enabled: false,
-            mass_kg: 1.0e6,
-            frequency_hz: 20.0,
-            damping_ratio: 0.05,
-        }
-    }
-}
-
-/// Static friction above kinetic (spec section 7, `stick_slip`).
-#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
-#[serde(default, deny_unknown_fields)]
-pub struct StickSlip {
-    pub enabled: bool,
-    /// r_s: static over kinetic friction.
-    pub static_ratio: f64,
-    /// v_s: Stribeck velocity, m/s.
-    pub stribeck_velocity_m_s: f64,
-}
-
-impl Default for StickSlip {
-    fn default() -> Self {
-        StickSlip {
-            enabled: false,
-            static_ratio: 2.0,
-            stribeck_velocity_m_s: 0.005,
-        }
-    }
-}
-
-/// Bounded valve/supply flow (spec section 7, `flow_saturation`).
-#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
-#[serde(default, deny_unknown_fields)]
-pub struct FlowSaturation {
-    pub enabled: bool,
-    pub max_flow_m3_s: f64,
-}
-
-impl Default for FlowSaturation {
-    fn default() -> Self {
-        FlowSaturation {
-            enabled: false,
-            max_flow_m3_s: 0.1,
-        }
-    }
-}
-
-/// Spool overlap (spec section 7, `valve_deadband`).
-#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
-#[serde(default, deny_unknown_fields)]
-pub struct ValveDeadband {
-    pub enabled: bool,
-    /// Deadband d as a fraction of full spool.
-    pub deadband: f64,
-}
-
-impl Default for ValveDeadband {
-    fn default() -> Self {
-        ValveDeadband {
-            enabled: false,
-            deadband: 0.02,
-        }
-    }
-}
+pub use crate::effects::flow_saturation::FlowSaturation;
+pub use crate::effects::foundation::Foundation;
+pub use crate::effects::specimen::Specimen;
+pub use crate::effects::stick_slip::StickSlip;
+pub use crate::effects::valve_deadband::ValveDeadband;
 
 /// Operating limits (spec section 8): the table's envelope. A run that leaves it
 /// describes nothing real (a real table's end stops, relief valves and interlocks act
@@ -348,13 +257,17 @@ pub struct Params {
 }
 
 /// Names of the catalogue effects (spec section 7), in catalogue order.
-pub const EFFECTS: [&str; 5] = [
-    "specimen",
-    "foundation",
-    "stick_slip",
-    "flow_saturation",
-    "valve_deadband",
-];
+pub const EFFECTS: [&str; CATALOGUE.len()] = effect_names();
+
+const fn effect_names() -> [&'static str; CATALOGUE.len()] {
+    let mut names = [""; CATALOGUE.len()];
+    let mut i = 0;
+    while i < CATALOGUE.len() {
+        names[i] = CATALOGUE[i].name;
+        i += 1;
+    }
+    names
+}
 
 impl Params {
     /// TREES Lab defaults (spec section 6).
@@ -450,57 +363,10 @@ impl Params {
                 rules.push(("servovalve.damping_ratio", c.damping_ratio, NonNegative));
             }
         }
-        if self.specimen.enabled {
-            rules.push(("specimen.mass_kg", self.specimen.mass_kg, Positive));
-            rules.push((
-                "specimen.frequency_hz",
-                self.specimen.frequency_hz,
-                Positive,
-            ));
-            rules.push((
-                "specimen.damping_ratio",
-                self.specimen.damping_ratio,
-                NonNegative,
-            ));
-        }
-        if self.foundation.enabled {
-            rules.push(("foundation.mass_kg", self.foundation.mass_kg, Positive));
-            rules.push((
-                "foundation.frequency_hz",
-                self.foundation.frequency_hz,
-                Positive,
-            ));
-            rules.push((
-                "foundation.damping_ratio",
-                self.foundation.damping_ratio,
-                NonNegative,
-            ));
-        }
-        if self.stick_slip.enabled {
-            rules.push((
-                "stick_slip.static_ratio",
-                self.stick_slip.static_ratio,
-                AtLeastOne,
-            ));
-            rules.push((
-                "stick_slip.stribeck_velocity_m_s",
-                self.stick_slip.stribeck_velocity_m_s,
-                Positive,
-            ));
-        }
-        if self.flow_saturation.enabled {
-            rules.push((
-                "flow_saturation.max_flow_m3_s",
-                self.flow_saturation.max_flow_m3_s,
-                Positive,
-            ));
-        }
-        if self.valve_deadband.enabled {
-            rules.push((
-                "valve_deadband.deadband",
-                self.valve_deadband.deadband,
-                HalfOpenUnit,
-            ));
+        for effect in CATALOGUE.iter().filter(|e| e.is_enabled(self)) {
+            for q in effect.parameters {
+                rules.push((q.dotted_key, (q.read)(self), q.rule));
+            }
         }
         for (key, value, rule) in rules {
             if let Some(text) = rule.broken_by(value) {
@@ -515,7 +381,7 @@ impl Params {
         let k = &self.controller;
         let s = &self.servovalve;
         let a = &self.actuator;
-        vec![
+        let mut entries = vec![
             ("controller.kp", k.kp),
             ("controller.kv", k.kv),
             ("controller.ka", k.ka),
@@ -540,25 +406,15 @@ impl Params {
                 self.friction.yield_displacement_m,
             ),
             ("friction.shape", self.friction.shape),
-            ("specimen.mass_kg", self.specimen.mass_kg),
-            ("specimen.frequency_hz", self.specimen.frequency_hz),
-            ("specimen.damping_ratio", self.specimen.damping_ratio),
-            ("foundation.mass_kg", self.foundation.mass_kg),
-            ("foundation.frequency_hz", self.foundation.frequency_hz),
-            ("foundation.damping_ratio", self.foundation.damping_ratio),
-            ("stick_slip.static_ratio", self.stick_slip.static_ratio),
-            (
-                "stick_slip.stribeck_velocity_m_s",
-                self.stick_slip.stribeck_velocity_m_s,
-            ),
-            (
-                "flow_saturation.max_flow_m3_s",
-                self.flow_saturation.max_flow_m3_s,
-            ),
-            ("valve_deadband.deadband", self.valve_deadband.deadband),
-            ("limits.stroke_m", self.limits.stroke_m),
-            ("limits.velocity_m_s", self.limits.velocity_m_s),
-        ]
+        ];
+        for effect in &CATALOGUE {
+            for q in effect.parameters {
+                entries.push((q.dotted_key, (q.read)(self)));
+            }
+        }
+        entries.push(("limits.stroke_m", self.limits.stroke_m));
+        entries.push(("limits.velocity_m_s", self.limits.velocity_m_s));
+        entries
     }
 
     /// Switch on a catalogue effect and set its parameters from `key=value` pairs
@@ -568,39 +424,17 @@ impl Params {
             Some((n, r)) => (n.trim(), r.trim()),
             None => (spec.trim(), ""),
         };
-        if !EFFECTS.contains(&name) {
-            return Err(format!(
+        let effect = crate::effects::by_name(name).ok_or_else(|| {
+            format!(
                 "unknown effect `{name}` in `{spec}`; known effects: {}",
                 EFFECTS.join(", ")
-            ));
-        }
-        let mut table: toml::Table =
-            toml::from_str(&self.to_toml_string()).map_err(|e| format!("internal: {e}"))?;
-        let block = table
-            .get_mut(name)
-            .and_then(|v| v.as_table_mut())
-            .ok_or_else(|| format!("internal: no block {name}"))?;
-        block.insert("enabled".into(), toml::Value::Boolean(true));
-        for pair in rest.split(',').filter(|s| !s.trim().is_empty()) {
-            let (k, v) = pair
-                .split_once('=')
-                .ok_or_else(|| format!("`{pair}` in `{spec}` is not key=value"))?;
-            let k = k.trim();
-            if k == "enabled" || !block.contains_key(k) {
-                let known: Vec<&String> = block.keys().filter(|x| *x != "enabled").collect();
-                return Err(format!(
-                    "effect `{name}` has no parameter `{k}`; it has {known:?}"
-                ));
-            }
-            let v: f64 = v
-                .trim()
-                .parse()
-                .map_err(|_| format!("`{name}.{k}` = `{v}` is not a number"))?;
-            block.insert(k.to_string(), toml::Value::Float(v));
-        }
-        let text = toml::to_string(&table).map_err(|e| format!("internal: {e}"))?;
-        *self =
-            Params::from_toml_str(&text, &format!("--effect {spec}")).map_err(|e| e.to_string())?;
+            )
+        })?;
+        let mut p = *self;
+        effect.apply_pairs(&mut p, rest, spec)?;
+        p.validate_in(&format!("--effect {spec}"))
+            .map_err(|e| e.to_string())?;
+        *self = p;
         Ok(())
     }
 }

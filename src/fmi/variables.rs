@@ -2,6 +2,7 @@
 //! description, and how each reads/writes the model's parameters or signals.
 //! `modelDescription.xml` and the documentation page are generated from it.
 
+use crate::effects::CATALOGUE;
 use crate::model::{Inputs, Outputs};
 use crate::params::{ActuatorModel, Params, ServovalveModel};
 
@@ -103,19 +104,6 @@ macro_rules! real_param {
     };
 }
 
-macro_rules! bool_param {
-    ($vr:expr, $name:expr, $desc:expr, $($field:ident).+) => {
-        Variable {
-            vr: $vr,
-            name: $name,
-            kind: Kind::Boolean,
-            role: Role::Parameter(|p| if p.$($field).+ { 1.0 } else { 0.0 }, |p, v| p.$($field).+ = v != 0.0),
-            unit: None,
-            description: $desc,
-        }
-    };
-}
-
 macro_rules! output {
     ($vr:expr, $name:expr, $unit:expr, $desc:expr, $field:ident) => {
         Variable {
@@ -129,8 +117,77 @@ macro_rules! output {
     };
 }
 
-/// Every variable of the FMU, in modelDescription order.
-pub static VARIABLES: &[Variable] = &[
+/// Every variable of the FMU, in modelDescription order: the table's own, then each
+/// catalogue effect's switch and parameters ([`crate::effects::CATALOGUE`]), then the
+/// operating limits. Built at compile time from the three parts.
+pub static VARIABLES: &[Variable] = &ALL_VARIABLES;
+
+/// Number of FMU rows the catalogue's effects declare (a switch plus its parameters each).
+const fn effect_row_count() -> usize {
+    let mut n = 0;
+    let mut i = 0;
+    while i < CATALOGUE.len() {
+        n += 1 + CATALOGUE[i].parameters.len();
+        i += 1;
+    }
+    n
+}
+
+const ROW_COUNT: usize = TABLE_VARIABLES.len() + effect_row_count() + LIMIT_VARIABLES.len();
+
+const ALL_VARIABLES: [Variable; ROW_COUNT] = all_variables();
+
+/// The table's rows, then per effect its Boolean switch and its Real parameters, then the
+/// limits.
+const fn all_variables() -> [Variable; ROW_COUNT] {
+    let mut rows = [TABLE_VARIABLES[0]; ROW_COUNT];
+    let mut n = 0;
+    let mut i = 0;
+    while i < TABLE_VARIABLES.len() {
+        rows[n] = TABLE_VARIABLES[i];
+        n += 1;
+        i += 1;
+    }
+    let mut e = 0;
+    while e < CATALOGUE.len() {
+        let effect = &CATALOGUE[e];
+        let switch = &effect.switch;
+        rows[n] = Variable {
+            vr: switch.value_reference,
+            name: switch.fmu_name,
+            kind: Kind::Boolean,
+            role: Role::Parameter(switch.read, switch.write),
+            unit: None,
+            description: switch.description,
+        };
+        n += 1;
+        let mut k = 0;
+        while k < effect.parameters.len() {
+            let q = &effect.parameters[k];
+            rows[n] = Variable {
+                vr: q.value_reference,
+                name: q.fmu_name,
+                kind: Kind::Real,
+                role: Role::Parameter(q.read, q.write),
+                unit: q.unit,
+                description: q.description,
+            };
+            n += 1;
+            k += 1;
+        }
+        e += 1;
+    }
+    let mut i = 0;
+    while i < LIMIT_VARIABLES.len() {
+        rows[n] = LIMIT_VARIABLES[i];
+        n += 1;
+        i += 1;
+    }
+    rows
+}
+
+/// The rows before the effects'.
+const TABLE_VARIABLES: &[Variable] = &[
     // inputs (continuous; linear interpolation over a step with fmi2SetRealInputDerivatives)
     Variable {
         vr: 0,
@@ -408,107 +465,10 @@ pub static VARIABLES: &[Variable] = &[
         "Bouc-Wen shape constant b in [0, 1)",
         friction.shape
     ),
-    // effects (spec section 7)
-    bool_param!(
-        140,
-        "specimen.enabled",
-        "Flexible SDOF specimen on the table",
-        specimen.enabled
-    ),
-    real_param!(
-        141,
-        "specimen.mass",
-        Some("kg"),
-        "Specimen mass",
-        specimen.mass_kg
-    ),
-    real_param!(
-        142,
-        "specimen.frequency",
-        Some("Hz"),
-        "Specimen natural frequency",
-        specimen.frequency_hz
-    ),
-    real_param!(
-        143,
-        "specimen.damping_ratio",
-        None,
-        "Specimen damping ratio",
-        specimen.damping_ratio
-    ),
-    bool_param!(
-        150,
-        "foundation.enabled",
-        "Compliant reaction mass",
-        foundation.enabled
-    ),
-    real_param!(
-        151,
-        "foundation.mass",
-        Some("kg"),
-        "Reaction mass M_f",
-        foundation.mass_kg
-    ),
-    real_param!(
-        152,
-        "foundation.frequency",
-        Some("Hz"),
-        "Foundation natural frequency (M_f alone)",
-        foundation.frequency_hz
-    ),
-    real_param!(
-        153,
-        "foundation.damping_ratio",
-        None,
-        "Foundation damping ratio",
-        foundation.damping_ratio
-    ),
-    bool_param!(
-        160,
-        "stick_slip.enabled",
-        "Static friction above kinetic friction (Stribeck)",
-        stick_slip.enabled
-    ),
-    real_param!(
-        161,
-        "stick_slip.static_ratio",
-        None,
-        "Static to kinetic friction ratio r_s",
-        stick_slip.static_ratio
-    ),
-    real_param!(
-        162,
-        "stick_slip.stribeck_velocity",
-        Some("m/s"),
-        "Stribeck velocity v_s",
-        stick_slip.stribeck_velocity_m_s
-    ),
-    bool_param!(
-        170,
-        "flow_saturation.enabled",
-        "Bounded valve flow",
-        flow_saturation.enabled
-    ),
-    real_param!(
-        171,
-        "flow_saturation.max_flow",
-        Some("m3/s"),
-        "Largest flow Q_max",
-        flow_saturation.max_flow_m3_s
-    ),
-    bool_param!(
-        180,
-        "valve_deadband.enabled",
-        "Spool overlap (no flow inside the band)",
-        valve_deadband.enabled
-    ),
-    real_param!(
-        181,
-        "valve_deadband.deadband",
-        None,
-        "Deadband d (fraction of full spool)",
-        valve_deadband.deadband
-    ),
+];
+
+/// The rows after the effects'.
+const LIMIT_VARIABLES: &[Variable] = &[
     // operating limits (spec section 8): fmi2DoStep stops beyond them with fmi2Error
     real_param!(
         190,

@@ -1,6 +1,8 @@
 //! Actuator and oil column (spec section 4) with the valve-side effects
-//! `flow_saturation` and `valve_deadband` (spec section 7).
+//! `flow_saturation` and `valve_deadband` (spec section 7), whose physics lives in
+//! [`crate::effects`].
 
+use crate::effects::{flow_saturation, valve_deadband};
 use crate::params::{ActuatorModel, Params};
 
 /// Pressure scale of the smoothed signed root, Pa: `sr(p) = p / (p^2 + p0^2)^(1/4)`.
@@ -49,36 +51,20 @@ impl Hydraulics {
             supply_pa: a.supply_pressure_pa,
             ideal_rate: 4.0 * a.bulk_modulus_pa / a.total_oil_volume_m3,
             orifice: a.flow_gain_m3_s / signed_root(a.supply_pressure_pa / 2.0),
-            max_flow: p
-                .flow_saturation
-                .enabled
-                .then_some(p.flow_saturation.max_flow_m3_s),
-            deadband: if p.valve_deadband.enabled {
-                p.valve_deadband.deadband
-            } else {
-                0.0
-            },
+            max_flow: p.flow_saturation.max_flow(),
+            deadband: p.valve_deadband.band(),
         }
     }
 
     /// Spool opening that meters flow: zero inside the deadband, shifted outside it (spec 7).
     #[inline]
     pub fn metering_opening(&self, xv: f64) -> f64 {
-        if self.deadband == 0.0 {
-            xv
-        } else if xv.abs() <= self.deadband {
-            0.0
-        } else {
-            xv - self.deadband.copysign(xv)
-        }
+        valve_deadband::metering_opening(self.deadband, xv)
     }
 
     #[inline]
     fn saturate(&self, q: f64) -> f64 {
-        match self.max_flow {
-            Some(m) => q.clamp(-m, m),
-            None => q,
-        }
+        flow_saturation::saturate(self.max_flow, q)
     }
 
     /// Chamber pressure rates `(P_a', P_b')` or, for the ideal actuator, `(P_L', 0)`.

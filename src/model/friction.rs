@@ -1,6 +1,7 @@
 //! Bouc-Wen viscoplastic friction (paper eqs. 4.14-4.15) with the optional Stribeck
-//! stick-slip amplitude (spec section 7, `stick_slip`).
+//! stick-slip amplitude (spec section 7, `stick_slip`, in [`crate::effects::stick_slip`]).
 
+use crate::effects::stick_slip::Stribeck;
 use crate::params::{Friction, StickSlip};
 
 #[derive(Debug, Clone, Copy)]
@@ -10,38 +11,25 @@ pub struct BoucWen {
     pub shape: f64,
     /// `1/Y`, precomputed.
     pub inv_yield: f64,
-    /// `(r_s - 1)` when stick-slip is on, else 0.
-    pub static_excess: f64,
-    /// `1 / v_s^2` of the Stribeck term.
-    pub inv_stribeck_sq: f64,
+    /// The stick-slip Stribeck term (zero when the effect is off).
+    pub stribeck: Stribeck,
 }
 
 impl BoucWen {
     pub fn new(f: &Friction, s: &StickSlip) -> Self {
-        let (static_excess, inv_stribeck_sq) = if s.enabled {
-            (s.static_ratio - 1.0, 1.0 / s.stribeck_velocity_m_s.powi(2))
-        } else {
-            (0.0, 0.0)
-        };
         BoucWen {
             force_n: f.force_n,
             yield_displacement_m: f.yield_displacement_m,
             shape: f.shape,
             inv_yield: 1.0 / f.yield_displacement_m,
-            static_excess,
-            inv_stribeck_sq,
+            stribeck: s.stribeck(),
         }
     }
 
     /// Dissipative force `F_D = F_mu(v) Z` (eq. 4.14; stick-slip amplitude of spec section 7).
     #[inline]
     pub fn force(&self, z: f64, v: f64) -> f64 {
-        let amplitude = if self.static_excess != 0.0 {
-            self.force_n * (1.0 + self.static_excess * (-(v * v) * self.inv_stribeck_sq).exp())
-        } else {
-            self.force_n
-        };
-        amplitude * z
+        self.stribeck.amplitude(self.force_n, v) * z
     }
 
     /// `Z' = (1 - Z^2 (b + (1 - b) sign(Z v))) v / Y` (eq. 4.15).

@@ -7,7 +7,6 @@
 
 pub mod actuator;
 pub mod controller;
-pub mod effects;
 pub mod friction;
 pub mod limits;
 pub mod payload;
@@ -15,9 +14,9 @@ pub mod servovalve;
 
 pub use controller::{Feedback, Reference};
 
+use crate::effects::oscillator::Oscillator;
 use crate::params::{Params, ServovalveModel};
 use actuator::Hydraulics;
-use effects::Oscillator;
 use friction::BoucWen;
 use payload::Payload;
 use servovalve::SpoolDynamics;
@@ -117,8 +116,8 @@ impl Model {
             hydraulics: Hydraulics::new(p),
             payload: Payload::new(&p.table),
             friction: BoucWen::new(&p.friction, &p.stick_slip),
-            specimen: Oscillator::specimen(&p.specimen),
-            foundation: Oscillator::foundation(&p.foundation),
+            specimen: p.specimen.oscillator(),
+            foundation: p.foundation.oscillator(),
         }
     }
 

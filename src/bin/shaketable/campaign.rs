@@ -28,6 +28,15 @@ enum Command {
     Init(crate::campaign_init::InitArgs),
 }
 
+/// `--effect` long help: the syntax, then the catalogue's effects and parameters.
+fn effect_long_help() -> String {
+    format!(
+        "Switch on a catalogue effect, e.g. `specimen:mass_kg=20000,frequency_hz=6,damping_ratio=0.02` \
+         (repeatable); keys left out keep their defaults. Effects (spec section 7):\n{}",
+        shaketable::effects::effect_syntax_help()
+    )
+}
+
 #[derive(clap::Args)]
 struct SynthArgs {
     /// Parameter file (TOML); the TREES Lab defaults when omitted.
@@ -35,7 +44,7 @@ struct SynthArgs {
     params: Option<PathBuf>,
     /// Switch on a catalogue effect, e.g. `specimen:mass_kg=20000,frequency_hz=6,damping_ratio=0.02`
     /// (repeatable).
-    #[arg(long = "effect", value_name = "NAME:KEY=VALUE,...")]
+    #[arg(long = "effect", value_name = "NAME:KEY=VALUE,...", long_help = effect_long_help())]
     effects: Vec<String>,
     /// Seed of the random references and of the sensor noise (same seed, same bytes).
     #[arg(long, default_value_t = 1)]

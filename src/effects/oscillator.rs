@@ -1,8 +1,6 @@
-//! Structural effects of the catalogue (spec section 7): a flexible SDOF `specimen` on
-//! the table and a compliant `foundation` (reaction mass on spring and damper).
-//! The valve-side effects live in `actuator.rs`, stick-slip in `friction.rs`.
+//! A mass on a spring and damper: the physics shared by the `specimen` and `foundation`
+//! effects (spec section 7).
 
-use crate::params::{Foundation, Specimen};
 use std::f64::consts::PI;
 
 /// A mass on a spring and damper: `k = m (2 pi f)^2`, `c = 2 zeta m 2 pi f`.
@@ -15,7 +13,7 @@ pub struct Oscillator {
 }
 
 impl Oscillator {
-    fn new(enabled: bool, mass_kg: f64, frequency_hz: f64, damping_ratio: f64) -> Self {
+    pub(crate) fn new(enabled: bool, mass_kg: f64, frequency_hz: f64, damping_ratio: f64) -> Self {
         let w = 2.0 * PI * frequency_hz;
         Oscillator {
             enabled,
@@ -23,14 +21,6 @@ impl Oscillator {
             stiffness_n_m: mass_kg * w * w,
             damping_n_s_m: 2.0 * damping_ratio * mass_kg * w,
         }
-    }
-
-    pub fn specimen(s: &Specimen) -> Self {
-        Oscillator::new(s.enabled, s.mass_kg, s.frequency_hz, s.damping_ratio)
-    }
-
-    pub fn foundation(f: &Foundation) -> Self {
-        Oscillator::new(f.enabled, f.mass_kg, f.frequency_hz, f.damping_ratio)
     }
 
     /// Spring-damper force on the oscillator's mass at `(x, v)` relative to its base.

@@ -1,0 +1,229 @@
+//! The catalogue of effects (spec section 7): each effect is one file here, and
+//! everything that lists effects reads [`CATALOGUE`].
+//!
+//! # Adding an effect
+//! 1. Write one file like [`valve_deadband`] (the smallest): its parameter struct (with
+//!    `enabled` and serde defaults), a `pub const EFFECT: Effect` declaring its FMU switch
+//!    and each parameter once with [`parameter!`] (TOML key, unit, description, FMU name
+//!    and value reference, validation rule, diagnosis fitting range), the test kinds where
+//!    its signature lives, and its physics hook: the small functions the model calls.
+//! 2. Add the file to the `mod` list and its `EFFECT` to [`CATALOGUE`], and the struct as a
+//!    field of [`crate::params::Params`] (its TOML block, named like the effect).
+//! 3. Call the physics hook from `src/model/`.
+//! 4. Tests: the catalogue tests below check that every parameter appears once in the
+//!    parameter file, in the FMU variables and in `--effect` parsing, with unique names
+//!    and value references; add a physics test of the effect in `tests/physics.rs`.
+//!
+//! The parameter validation, `numeric_entries`, the `--effect name:key=value` syntax,
+//! the FMU variable rows (`src/fmi/variables.rs`) and campaign synthesis read the
+//! catalogue; nothing else needs an edit.
+
+pub mod flow_saturation;
+pub mod foundation;
+pub mod oscillator;
+pub mod specimen;
+pub mod stick_slip;
+pub mod valve_deadband;
+
+use crate::params::{Params, Rule};
+
+/// Range a diagnosis fit may move one effect parameter in (`lower <= x <= upper`).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct FitRange {
+    pub lower: f64,
+    pub upper: f64,
+}
+
+/// One numeric parameter of an effect, declared once.
+#[derive(Clone, Copy)]
+pub struct Parameter {
+    /// Key inside the effect's TOML block (and in `--effect name:key=value`).
+    pub key: &'static str,
+    /// Dotted TOML key `effect.key`, as validation errors and reports name it.
+    pub dotted_key: &'static str,
+    /// FMU variable name.
+    pub fmu_name: &'static str,
+    /// FMU value reference.
+    pub value_reference: u32,
+    /// FMU unit, `None` when dimensionless.
+    pub unit: Option<&'static str>,
+    /// FMU description.
+    pub description: &'static str,
+    /// Validation rule, checked while the effect is enabled.
+    pub rule: Rule,
+    /// Fixed fitting range of the diagnosis (see [`Effect::fit_bounds`]).
+    pub fit_range: FitRange,
+    pub read: fn(&Params) -> f64,
+    pub write: fn(&mut Params, f64),
+}
+
+/// The `enabled` switch of an effect as an FMU Boolean variable (value 1 or 0).
+#[derive(Clone, Copy)]
+pub struct Switch {
+    pub fmu_name: &'static str,
+    pub value_reference: u32,
+    pub description: &'static str,
+    pub read: fn(&Params) -> f64,
+    pub write: fn(&mut Params, f64),
+}
+
+/// One catalogue effect: its switch, parameters and diagnosis metadata.
+#[derive(Clone, Copy)]
+pub struct Effect {
+    /// Name: the TOML block, the `--effect` name and the FMU variable prefix.
+    pub name: &'static str,
+    pub switch: Switch,
+    pub parameters: &'static [Parameter],
+    /// Test kinds where the effect's signature lives, recorded as the diagnosis names them
+    /// today (`src/diagnose/mod.rs`, `Effect::signature_tests`); to be replaced by test
+    /// kinds when the diagnosis picks tests by what they excite.
+    pub signature_tests: &'static [&'static str],
+}
+
+/// Declares one [`Parameter`] of the block `$block.$field` (see the effect files).
+macro_rules! parameter {
+    ($block:ident . $field:ident, fmu: $fmu:literal, vr: $vr:literal, unit: $unit:expr,
+     rule: $rule:expr, fit: ($lower:expr, $upper:expr), $description:literal) => {
+        $crate::effects::Parameter {
+            key: stringify!($field),
+            dotted_key: concat!(stringify!($block), ".", stringify!($field)),
+            fmu_name: $fmu,
+            value_reference: $vr,
+            unit: $unit,
+            description: $description,
+            rule: $rule,
+            fit_range: $crate::effects::FitRange {
+                lower: $lower,
+                upper: $upper,
+            },
+            read: |p| p.$block.$field,
+            write: |p, v| p.$block.$field = v,
+        }
+    };
+}
+pub(crate) use parameter;
+
+/// Declares the [`Switch`] of the block `$block` (its `enabled` field).
+macro_rules! switch {
+    ($block:ident, fmu: $fmu:literal, vr: $vr:literal, $description:literal) => {
+        $crate::effects::Switch {
+            fmu_name: $fmu,
+            value_reference: $vr,
+            description: $description,
+            read: |p| if p.$block.enabled { 1.0 } else { 0.0 },
+            write: |p, v| p.$block.enabled = v != 0.0,
+        }
+    };
+}
+pub(crate) use switch;
+
+/// Every effect, in catalogue order (spec section 7): the order of the parameter file,
+/// the FMU variables, validation and diagnosis.
+pub const CATALOGUE: [Effect; 5] = [
+    specimen::EFFECT,
+    foundation::EFFECT,
+    stick_slip::EFFECT,
+    flow_saturation::EFFECT,
+    valve_deadband::EFFECT,
+];
+
+/// The effect named `name`.
+pub fn by_name(name: &str) -> Option<&'static Effect> {
+    CATALOGUE.iter().find(|e| e.name == name)
+}
+
+/// The effects and their parameters for the `--effect` help: one line per effect,
+/// `name: key (unit, default value), ...`.
+pub fn effect_syntax_help() -> String {
+    let defaults = Params::trees_lab();
+    let lines: Vec<String> = CATALOGUE
+        .iter()
+        .map(|e| {
+            let keys: Vec<String> = e
+                .parameters
+                .iter()
+                .map(|q| {
+                    let unit = q.unit.map(|u| format!("{u}, ")).unwrap_or_default();
+                    format!("{} ({unit}default {})", q.key, (q.read)(&defaults))
+                })
+                .collect();
+            format!("  {}: {}", e.name, keys.join(", "))
+        })
+        .collect();
+    lines.join("\n")
+}
+
+impl Effect {
+    /// Whether the effect is switched on in `p`.
+    pub fn is_enabled(&self, p: &Params) -> bool {
+        (self.switch.read)(p) != 0.0
+    }
+
+    /// Switch the effect on or off in `p`.
+    pub fn set_enabled(&self, p: &mut Params, on: bool) {
+        (self.switch.write)(p, if on { 1.0 } else { 0.0 })
+    }
+
+    /// The parameter with TOML key `key`.
+    pub fn parameter(&self, key: &str) -> Option<&'static Parameter> {
+        self.parameters.iter().find(|q| q.key == key)
+    }
+
+    /// The parameter `key` in `p`; `None` when the effect has no such parameter.
+    pub fn read(&self, p: &Params, key: &str) -> Option<f64> {
+        self.parameter(key).map(|q| (q.read)(p))
+    }
+
+    /// Set the parameter `key` in `p`; `false` when the effect has no such parameter.
+    pub fn apply(&self, p: &mut Params, key: &str, value: f64) -> bool {
+        match self.parameter(key) {
+            Some(q) => {
+                (q.write)(p, value);
+                true
+            }
+            None => false,
+        }
+    }
+
+    /// Fitting bounds of the diagnosis, one per parameter in declaration order.
+    ///
+    /// Today these are the fixed ranges of `src/diagnose/mod.rs` (`Effect::bounds`), set
+    /// for the 41-t TREES Lab table and copied as they are so the diagnosis stays
+    /// byte-identical; `table` is taken so that a later issue can scale them to the
+    /// table's mass, flow gain and stroke.
+    pub fn fit_bounds(&self, table: &Params) -> Vec<FitRange> {
+        let _ = table;
+        self.parameters.iter().map(|q| q.fit_range).collect()
+    }
+
+    /// Switch the effect on in `p` and set its parameters from `key=value` pairs: the
+    /// `--effect specimen:mass_kg=20000,frequency_hz=6` syntax after the colon.
+    /// The result is not validated here ([`Params::apply_effect_spec`] does).
+    pub fn apply_pairs(&self, p: &mut Params, pairs: &str, spec: &str) -> Result<(), String> {
+        self.set_enabled(p, true);
+        for pair in pairs.split(',').filter(|s| !s.trim().is_empty()) {
+            let (k, v) = pair
+                .split_once('=')
+                .ok_or_else(|| format!("`{pair}` in `{spec}` is not key=value"))?;
+            let k = k.trim();
+            let name = self.name;
+            let Some(q) = self.parameter(k) else {
+                // sorted, as the message has always listed them
+                let mut known: Vec<&str> = self.parameters.iter().map(|q| q.key).collect();
+                known.sort_unstable();
+                return Err(format!(
+                    "effect `{name}` has no parameter `{k}`; it has {known:?}"
+                ));
+            };
+            let v: f64 = v
+                .trim()
+                .parse()
+                .map_err(|_| format!("`{name}.{k}` = `{v}` is not a number"))?;
+            (q.write)(p, v);
+        }
+        Ok(())
+    }
+}
+
+#[cfg(test)]
+mod tests;
