@@ -225,7 +225,8 @@ fn missing_file_is_named() {
 }
 
 /// The binary: a flipped force channel is screened (exit 0, finding printed) by
-/// `identify` and `campaign check`; an all-zero R1 makes `diagnose` refuse (exit 1).
+/// `identify` and `campaign check`; an all-zero R1 with no spool recorded elsewhere (no
+/// other test can give the servovalve) makes `diagnose` refuse (exit 1).
 #[test]
 fn cli_exit_codes() {
     let bin = env!("CARGO_BIN_EXE_shaketable");
@@ -234,6 +235,9 @@ fn cli_exit_codes() {
     let mut c = base().clone();
     c.records[1].force_n.iter_mut().for_each(|x| *x = -*x);
     c.records[0].valve_command.iter_mut().for_each(|x| *x = 0.0);
+    for r in c.records.iter_mut().skip(1) {
+        r.spool_position = None;
+    }
     write_campaign(&c, &dir).unwrap();
     let run = |args: &[&str]| std::process::Command::new(bin).args(args).output().unwrap();
     let d = dir.to_str().unwrap();
