@@ -3,8 +3,9 @@
 #   scripts/build_fmu.sh                    # TREES Lab defaults as start values
 #   scripts/build_fmu.sh --params lab.toml  # a lab's parameter file baked in
 # The cdylib is built in release and packaged with modelDescription.xml (generated from
-# the variable table), documentation/index.html and, with --params, resources/parameters.toml
-# (read by fmi2Instantiate, so the binary starts from the same values the XML declares).
+# the variable table, its GUID from the start values), documentation/index.html, model.png
+# and resources/parameters.toml (the --params file, or the defaults written out; read by
+# fmi2Instantiate, so the binary starts from the same values the XML declares).
 # The binary is linked against glibc 2.17 (manylinux2014's baseline) with cargo-zigbuild,
 # so it loads on RHEL 7/8, Ubuntu 18.04/20.04, Debian 9-11 and later, not only on the
 # machine that built it (scripts/setup.sh installs zig and cargo-zigbuild into .venv).
@@ -39,16 +40,20 @@ SO="$ROOT/target/$RUST_TARGET/release/libshaketable.so"
 mkdir -p "$(dirname "$OUT")"
 OUT="$(cd "$(dirname "$OUT")" && pwd)/$(basename "$OUT")"
 STAGE="$(dirname "$OUT")/.stage-$(basename "$OUT" .fmu)-$$"
-mkdir -p "$STAGE/binaries/linux64" "$STAGE/documentation"
+mkdir -p "$STAGE/binaries/linux64" "$STAGE/documentation" "$STAGE/resources"
 ARGS=()
 if [ -n "$PARAMS" ]; then
   "$BIN" params --check "$PARAMS" > /dev/null
   ARGS=(--params "$PARAMS")
-  mkdir -p "$STAGE/resources"
   cp "$PARAMS" "$STAGE/resources/parameters.toml"
+else
+  "$BIN" params --defaults > "$STAGE/resources/parameters.toml"
 fi
-"$BIN" fmu description "${ARGS[@]}" > "$STAGE/modelDescription.xml"
+# the build's time, or SOURCE_DATE_EPOCH's for a reproducible build
+GENERATED_AT="$(date -u ${SOURCE_DATE_EPOCH:+-d @$SOURCE_DATE_EPOCH} +%Y-%m-%dT%H:%M:%SZ)"
+"$BIN" fmu description "${ARGS[@]}" --generated-at "$GENERATED_AT" > "$STAGE/modelDescription.xml"
 "$BIN" fmu documentation "${ARGS[@]}" > "$STAGE/documentation/index.html"
+"$BIN" fmu icon --out "$STAGE/model.png"
 cp "$SO" "$STAGE/binaries/linux64/ShakeTable.so"
 python3 - "$STAGE" "$OUT" <<'PY'
 import os, sys, zipfile

@@ -71,7 +71,7 @@ def run_fmu(fmu, t, d, v, a, params=None, outputs=("acceleration",), external=No
     for k, val in (params or {}).items():
         if types[k] == "Real":
             slave.setReal([vr[k]], [float(val)])
-        elif types[k] == "Integer":
+        elif types[k] in ("Integer", "Enumeration"):
             slave.setInteger([vr[k]], [int(val)])
         else:
             slave.setBoolean([vr[k]], [bool(val)])

@@ -312,56 +312,15 @@ impl Params {
                 return Err(invalid(file, key, value, "must be a finite number"));
             }
         }
-        use Rule::*;
+        let values: std::collections::HashMap<&str, f64> =
+            self.numeric_entries().into_iter().collect();
+        let mut rules: Vec<(&str, f64, Rule)> = TABLE_RULES
+            .iter()
+            .map(|&(key, rule)| (key, values[key], rule))
+            .collect();
         let c = &self.servovalve;
-        let a = &self.actuator;
-        let mut rules: Vec<(&str, f64, Rule)> = vec![
-            ("servovalve.gain", c.gain, Positive),
-            ("actuator.piston_area_m2", a.piston_area_m2, PISTON_AREA_M2),
-            (
-                "actuator.total_oil_volume_m3",
-                a.total_oil_volume_m3,
-                OIL_VOLUME_M3,
-            ),
-            (
-                "actuator.bulk_modulus_pa",
-                a.bulk_modulus_pa,
-                BULK_MODULUS_PA,
-            ),
-            ("actuator.leakage_m3_s_pa", a.leakage_m3_s_pa, NonNegative),
-            ("actuator.flow_gain_m3_s", a.flow_gain_m3_s, FLOW_GAIN_M3_S),
-            (
-                "actuator.supply_pressure_pa",
-                a.supply_pressure_pa,
-                SUPPLY_PRESSURE_PA,
-            ),
-            ("table.mass_kg", self.table.mass_kg, TABLE_MASS_KG),
-            ("table.stiffness_n_m", self.table.stiffness_n_m, NonNegative),
-            ("friction.force_n", self.friction.force_n, NonNegative),
-            (
-                "friction.yield_displacement_m",
-                self.friction.yield_displacement_m,
-                YIELD_DISPLACEMENT_M,
-            ),
-            ("friction.shape", self.friction.shape, HalfOpenUnit),
-            ("limits.stroke_m", self.limits.stroke_m, Positive),
-            ("limits.velocity_m_s", self.limits.velocity_m_s, Positive),
-        ];
-        match c.model {
-            ServovalveModel::Delay => {
-                rules.push(("servovalve.time_constant_s", c.time_constant_s, NonNegative))
-            }
-            ServovalveModel::FirstOrder => {
-                rules.push(("servovalve.time_constant_s", c.time_constant_s, Positive))
-            }
-            ServovalveModel::SecondOrder => {
-                rules.push((
-                    "servovalve.natural_frequency_hz",
-                    c.natural_frequency_hz,
-                    Positive,
-                ));
-                rules.push(("servovalve.damping_ratio", c.damping_ratio, NonNegative));
-            }
+        for (key, rule) in servovalve_rules(c.model) {
+            rules.push((key, values[key], rule));
         }
         for effect in CATALOGUE.iter().filter(|e| e.is_enabled(self)) {
             for q in effect.parameters {
@@ -439,6 +398,69 @@ impl Params {
     }
 }
 
+/// The validation rule of every parameter of the table itself (the effects declare theirs
+/// in the catalogue, the servovalve's depend on its model: [`servovalve_rules`]). Read by
+/// [`Params::validate_in`] and by the FMU's `min`/`max` ([`fmu_rule_of`]).
+pub const TABLE_RULES: &[(&str, Rule)] = &[
+    // a TVC loop's gains are positive or off: a negative one turns feedback into
+    // positive feedback (or the feed-forward against the motion)
+    ("controller.kp", Rule::NonNegative),
+    ("controller.kv", Rule::NonNegative),
+    ("controller.ka", Rule::NonNegative),
+    ("controller.fv", Rule::NonNegative),
+    ("controller.fa", Rule::NonNegative),
+    ("controller.kdp", Rule::NonNegative),
+    ("servovalve.gain", Rule::Positive),
+    ("actuator.piston_area_m2", PISTON_AREA_M2),
+    ("actuator.total_oil_volume_m3", OIL_VOLUME_M3),
+    ("actuator.bulk_modulus_pa", BULK_MODULUS_PA),
+    ("actuator.leakage_m3_s_pa", Rule::NonNegative),
+    ("actuator.flow_gain_m3_s", FLOW_GAIN_M3_S),
+    ("actuator.supply_pressure_pa", SUPPLY_PRESSURE_PA),
+    ("table.mass_kg", TABLE_MASS_KG),
+    ("table.stiffness_n_m", Rule::NonNegative),
+    ("friction.force_n", Rule::NonNegative),
+    ("friction.yield_displacement_m", YIELD_DISPLACEMENT_M),
+    ("friction.shape", Rule::HalfOpenUnit),
+    ("limits.stroke_m", Rule::Positive),
+    ("limits.velocity_m_s", Rule::Positive),
+];
+
+/// The servovalve's rules for its model (spec section 3): a delay may be zero, a time
+/// constant may not; the second-order keys are checked only for that model.
+pub fn servovalve_rules(model: ServovalveModel) -> Vec<(&'static str, Rule)> {
+    match model {
+        ServovalveModel::Delay => vec![("servovalve.time_constant_s", Rule::NonNegative)],
+        ServovalveModel::FirstOrder => vec![("servovalve.time_constant_s", Rule::Positive)],
+        ServovalveModel::SecondOrder => vec![
+            ("servovalve.natural_frequency_hz", Rule::Positive),
+            ("servovalve.damping_ratio", Rule::NonNegative),
+        ],
+    }
+}
+
+/// The rule of the parameter `key` that holds whatever the structural choices are (the
+/// loosest over the servovalve models): the FMU declares it as `min`/`max`.
+pub fn fmu_rule_of(key: &str) -> Option<Rule> {
+    let servovalve = [
+        ServovalveModel::Delay,
+        ServovalveModel::FirstOrder,
+        ServovalveModel::SecondOrder,
+    ];
+    TABLE_RULES
+        .iter()
+        .map(|&(k, r)| (k, r))
+        .chain(servovalve.iter().flat_map(|&m| servovalve_rules(m)))
+        .chain(
+            CATALOGUE
+                .iter()
+                .flat_map(|e| e.parameters.iter().map(|q| (q.dotted_key, q.rule))),
+        )
+        .filter(|&(k, _)| k == key)
+        .map(|(_, r)| r)
+        .reduce(Rule::loosest)
+}
+
 fn invalid(file: &str, key: &str, value: f64, rule: &str) -> ParamsError {
     ParamsError::Invalid {
         file: file.to_string(),
@@ -514,6 +536,25 @@ pub const YIELD_DISPLACEMENT_M: Rule = Rule::Range {
 };
 
 impl Rule {
+    /// The inclusive bounds an FMU can declare: `Positive` becomes `min = 0` (FMI bounds
+    /// are inclusive; the FMU itself refuses 0 at initialization).
+    pub fn bounds(self) -> (Option<f64>, Option<f64>) {
+        match self {
+            Rule::Positive | Rule::NonNegative => (Some(0.0), None),
+            Rule::HalfOpenUnit => (Some(0.0), Some(1.0)),
+            Rule::AtLeastOne => (Some(1.0), None),
+            Rule::Range { min, max, .. } => (Some(min), Some(max)),
+        }
+    }
+
+    /// Of two rules of one key, the one that allows more (`NonNegative` over `Positive`).
+    fn loosest(self, other: Rule) -> Rule {
+        match (self, other) {
+            (Rule::Positive, Rule::NonNegative) => other,
+            _ => self,
+        }
+    }
+
     /// `None` when `v` satisfies the rule, else the rule in words.
     pub fn broken_by(self, v: f64) -> Option<String> {
         let ok = match self {

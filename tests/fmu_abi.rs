@@ -7,7 +7,7 @@
 use fmi_sys::fmi2::*;
 use proptest::prelude::*;
 use shaketable::fmi::export::*;
-use shaketable::fmi::model_description::GUID;
+use shaketable::fmi::model_description::guid as description_guid;
 use shaketable::solver::DEFAULT_MAX_SUBSTEP_S;
 use shaketable::{Model, Params, SensorNoise, Simulator};
 use std::ffi::CString;
@@ -236,7 +236,9 @@ fn bad_calls_are_errors_with_messages() {
         assert!(fmi2Instantiate(
             n.as_ptr(),
             fmi2Type_fmi2ModelExchange,
-            CString::new(GUID).unwrap().as_ptr(),
+            CString::new(description_guid(&shaketable::Params::trees_lab()))
+                .unwrap()
+                .as_ptr(),
             std::ptr::null(),
             &cb,
             0,

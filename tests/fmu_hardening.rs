@@ -6,6 +6,7 @@
 
 use fmi_sys::fmi2::*;
 use shaketable::fmi::export::*;
+use shaketable::fmi::model_description::guid;
 use shaketable::fmi::variables::inputs_from;
 use shaketable::solver::DEFAULT_MAX_SUBSTEP_S;
 use shaketable::{Model, Params, SensorNoise, Simulator};
@@ -87,7 +88,9 @@ fn null_resource_location_warns_that_defaults_are_used() {
 
 #[test]
 fn shipped_parameters_are_read_through_every_file_uri_form() {
-    let (_tmp, dir) = resources_with("[table]\nmass_kg = 50000.0\n");
+    let text = "[table]\nmass_kg = 50000.0\n";
+    let (_tmp, dir) = resources_with(text);
+    let shipped_guid = guid(&Params::from_toml_str(text, "shipped").unwrap());
     let enc = encode(&dir);
     for (i, uri) in [
         format!("file://{enc}"),
@@ -99,7 +102,7 @@ fn shipped_parameters_are_read_through_every_file_uri_form() {
     .enumerate()
     {
         let name = format!("form{i}");
-        let f = Fmu::open(&name, Some(uri.as_bytes())).expect(uri);
+        let f = Fmu::open_as(&name, Some(uri.as_bytes()), &shipped_guid).expect(uri);
         unsafe { fmi2EnterInitializationMode(f.c) };
         assert_eq!(
             f.get(&[TABLE_MASS])[0],
@@ -109,6 +112,25 @@ fn shipped_parameters_are_read_through_every_file_uri_form() {
         );
         assert!(logged(&name).is_empty(), "{uri}: {:?}", logged(&name));
     }
+}
+
+/// The GUID belongs to the start values: the defaults' GUID does not open an FMU that
+/// ships other parameters, and the refusal says why.
+#[test]
+fn a_guid_of_other_start_values_is_refused() {
+    let (_tmp, dir) = resources_with("[table]\nmass_kg = 50000.0\n");
+    let uri = format!("file://{}", encode(&dir));
+    assert!(Fmu::open("otherguid", Some(uri.as_bytes())).is_none());
+    let msgs = logged("otherguid");
+    assert!(
+        msgs.iter()
+            .any(|m| m.contains("GUID") && m.contains("start values")),
+        "{msgs:?}"
+    );
+    assert_ne!(
+        guid(&Params::trees_lab()),
+        guid(&Params::from_toml_str("[table]\nmass_kg = 50000.0\n", "x").unwrap())
+    );
 }
 
 #[test]

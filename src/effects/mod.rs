@@ -60,6 +60,8 @@ pub struct Parameter {
 /// The `enabled` switch of an effect as an FMU Boolean variable (value 1 or 0).
 #[derive(Clone, Copy)]
 pub struct Switch {
+    /// Dotted TOML key `effect.enabled`.
+    pub dotted_key: &'static str,
     pub fmu_name: &'static str,
     pub value_reference: u32,
     pub description: &'static str,
@@ -107,6 +109,7 @@ pub(crate) use parameter;
 macro_rules! switch {
     ($block:ident, fmu: $fmu:literal, vr: $vr:literal, $description:literal) => {
         $crate::effects::Switch {
+            dotted_key: concat!(stringify!($block), ".enabled"),
             fmu_name: $fmu,
             value_reference: $vr,
             description: $description,

@@ -8,7 +8,7 @@
 use super::instance::{
     deserialize, fmi_name_of_key, serialize, FmiError, Instance, Phase, Snapshot,
 };
-use super::model_description::GUID;
+use super::model_description::guid as description_guid;
 use super::variables::Kind;
 use crate::params::{Params, ParamsError};
 use fmi_sys::fmi2::*;
@@ -364,11 +364,17 @@ fn instantiate(
             "fmuType {fmu_type}: this FMU is Co-Simulation only"
         ));
     }
-    if guid != Some(GUID) {
-        return Err(format!("GUID {guid:?} does not match this binary's {GUID}"));
-    }
     let (params, warning) =
         start_params(resources).map_err(|e| format!("resources/parameters.toml: {e}"))?;
+    // the GUID names the description of these start values (one per parameter file)
+    let expected = description_guid(&params);
+    if guid != Some(expected.as_str()) {
+        return Err(format!(
+            "GUID {guid:?} does not match {expected}, the GUID of the modelDescription.xml \
+             this binary generates for its start values (resources/parameters.toml or the \
+             TREES Lab defaults): the FMU's files do not belong together"
+        ));
+    }
     if let Some(w) = warning {
         comp.log(
             WARNING,

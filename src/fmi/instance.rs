@@ -53,22 +53,13 @@ fn comm_point_tolerance(time: f64, h: f64) -> f64 {
     (COMM_POINT_ULPS * f64::EPSILON * time.abs().max(1.0)).min(COMM_POINT_STEP_FRACTION * h)
 }
 
-/// The FMI variable name of a parameter-file key (`table.mass_kg` -> `table.mass`), found
-/// by writing a marker through each variable's setter; `None` for a key with no variable.
+/// The FMI variable name of a parameter-file key (`table.mass_kg` -> `table.mass`);
+/// `None` for a key with no variable.
 pub fn fmi_name_of_key(key: &str) -> Option<&'static str> {
-    const MARKER: f64 = -8.125e-7;
-    VARIABLES.iter().find_map(|v| match v.role {
-        Role::Parameter(_, set) if v.kind == Kind::Real => {
-            let mut p = Params::trees_lab();
-            set(&mut p, MARKER);
-            let hit = p
-                .numeric_entries()
-                .iter()
-                .any(|&(k, x)| k == key && x == MARKER);
-            hit.then_some(v.name)
-        }
-        _ => None,
-    })
+    VARIABLES
+        .iter()
+        .find(|v| v.key == Some(key))
+        .map(|v| v.name)
 }
 
 /// A parameter error in the FMU's words: the FMI variable name, not the TOML key.

@@ -6,6 +6,7 @@
 //! the C ABI (built into the crate's cdylib, packaged as `binaries/linux64/ShakeTable.so`).
 
 pub mod export;
+pub mod icon;
 pub mod instance;
 pub mod model_description;
 pub mod variables;

@@ -1,18 +1,26 @@
 //! `modelDescription.xml` and the documentation page, generated from the variable table
 //! ([`super::variables::VARIABLES`]) with the start values of a parameter set.
 
-use super::variables::{unit_exponents, Kind, Role, VARIABLES};
+use super::variables::{unit, Kind, Role, Variable, INPUTS, UNITS, VARIABLES};
 use crate::model::Model;
-use crate::params::Params;
+use crate::params::{fmu_rule_of, Params};
 use quick_xml::events::{BytesDecl, BytesEnd, BytesStart, Event};
 use quick_xml::Writer;
 use std::io::Cursor;
 
 /// The model identifier: the shared library is `binaries/linux64/ShakeTable.so`.
 pub const MODEL_IDENTIFIER: &str = "ShakeTable";
-/// The GUID the binary checks in fmi2Instantiate. It names the variable table's version,
-/// not the start values (a lab's parameter file is baked in as resources/parameters.toml).
-pub const GUID: &str = "{5e1d7a3c-9b7f-4d2e-8a61-2c0f4b7d9e13}";
+
+/// The GUID's stand-in while the text the GUID is computed from is written.
+const GUID_PLACEHOLDER: &str = "{00000000-0000-0000-0000-000000000000}";
+
+/// Namespace of the GUIDs (UUID v5): fixed, so equal descriptions give equal GUIDs.
+const GUID_NAMESPACE: uuid::Uuid = uuid::Uuid::from_u128(0x5e1d7a3c_9b7f_4d2e_8a61_2c0f4b7d9e13);
+
+/// The header attributes that say who made the FMU and under which terms.
+const AUTHOR: &str = "shaketable developers";
+const COPYRIGHT: &str = "Copyright (c) 2026 the shaketable developers";
+const LICENSE: &str = env!("CARGO_PKG_LICENSE");
 
 fn fmt_real(x: f64) -> String {
     let mut b = ryu::Buffer::new();
@@ -20,7 +28,7 @@ fn fmt_real(x: f64) -> String {
 }
 
 /// The start value of every variable for parameters `p` (inputs 0, outputs at rest).
-pub fn start_value(v: &super::variables::Variable, p: &Params) -> String {
+pub fn start_value(v: &Variable, p: &Params) -> String {
     match v.role {
         Role::Input(_) => "0".into(),
         Role::Output(f) => {
@@ -41,118 +49,258 @@ pub fn start_value(v: &super::variables::Variable, p: &Params) -> String {
     }
 }
 
-/// The XML for parameters `p` (their values become the parameters' start values).
+/// The GUID of the description for parameters `p`: a UUID v5 of its text (without the
+/// generation date), so it changes with the start values, the variables and the version,
+/// and the binary recomputes it from the parameters it starts from (fmi2Instantiate).
+pub fn guid(p: &Params) -> String {
+    let text = description_xml(p, GUID_PLACEHOLDER, None);
+    format!(
+        "{{{}}}",
+        uuid::Uuid::new_v5(&GUID_NAMESPACE, text.as_bytes()).hyphenated()
+    )
+}
+
+/// The XML for parameters `p` (their values become the parameters' start values), without
+/// a generation date (the committed copy: reproducible).
 pub fn model_description_xml(p: &Params) -> String {
-    let mut w = Writer::new_with_indent(Cursor::new(Vec::new()), b' ', 2);
-    let mut put = |e: Event| {
-        // writing into a Vec cannot fail
-        let _ = w.write_event(e);
-    };
-    put(Event::Decl(BytesDecl::new("1.0", Some("UTF-8"), None)));
-    let mut root = BytesStart::new("fmiModelDescription");
-    root.push_attribute(("fmiVersion", "2.0"));
-    root.push_attribute(("modelName", MODEL_IDENTIFIER));
-    root.push_attribute(("guid", GUID));
-    root.push_attribute((
-        "description",
-        "Servo-hydraulic uni-axial shake table (EUCENTRE TREES Lab): TVC controller, servovalve, actuator and oil column, payload with Bouc-Wen friction, and the effects of spec section 7",
-    ));
-    root.push_attribute((
-        "generationTool",
-        concat!("shaketable ", env!("CARGO_PKG_VERSION")),
-    ));
-    root.push_attribute(("variableNamingConvention", "flat"));
-    root.push_attribute(("numberOfEventIndicators", "0"));
-    put(Event::Start(root));
-    let mut cs = BytesStart::new("CoSimulation");
-    for (k, v) in [
-        ("modelIdentifier", MODEL_IDENTIFIER),
-        ("canHandleVariableCommunicationStepSize", "true"),
-        ("canInterpolateInputs", "true"),
-        ("maxOutputDerivativeOrder", "0"),
-        ("canRunAsynchronuously", "false"),
-        ("canBeInstantiatedOnlyOncePerProcess", "false"),
-        ("canNotUseMemoryManagementFunctions", "true"),
-        ("canGetAndSetFMUstate", "true"),
-        ("canSerializeFMUstate", "true"),
-        ("providesDirectionalDerivative", "false"),
-    ] {
-        cs.push_attribute((k, v));
+    description_xml(p, &guid(p), None)
+}
+
+/// The XML with `generationDateAndTime` (ISO 8601, e.g. `2026-11-24T18:00:00Z`), as
+/// scripts/build_fmu.sh packages it.
+pub fn model_description_xml_at(p: &Params, generated_at: &str) -> String {
+    description_xml(p, &guid(p), Some(generated_at))
+}
+
+/// Writes XML events into a buffer (writing into a `Vec` cannot fail).
+struct Xml(Writer<Cursor<Vec<u8>>>);
+
+impl Xml {
+    fn put(&mut self, e: Event) {
+        let _ = self.0.write_event(e);
     }
-    put(Event::Empty(cs));
-    // units
-    let mut units: Vec<&str> = VARIABLES.iter().filter_map(|v| v.unit).collect();
-    units.sort();
-    units.dedup();
-    put(Event::Start(BytesStart::new("UnitDefinitions")));
-    for u in &units {
-        let mut e = BytesStart::new("Unit");
-        e.push_attribute(("name", *u));
-        put(Event::Start(e));
-        let (kg, m, s) = unit_exponents(u).unwrap_or((0, 0, 0));
-        let mut b = BytesStart::new("BaseUnit");
-        for (k, x) in [("kg", kg), ("m", m), ("s", s)] {
-            if x != 0 {
-                b.push_attribute((k, x.to_string().as_str()));
-            }
-        }
-        put(Event::Empty(b));
-        put(Event::End(BytesEnd::new("Unit")));
+    fn start(&mut self, tag: &str, attributes: &[(&str, &str)]) {
+        let mut e = BytesStart::new(tag);
+        e.extend_attributes(attributes.iter().copied());
+        self.put(Event::Start(e));
     }
-    put(Event::End(BytesEnd::new("UnitDefinitions")));
-    let mut de = BytesStart::new("DefaultExperiment");
-    de.push_attribute(("startTime", "0"));
-    de.push_attribute(("stopTime", "10"));
-    de.push_attribute(("stepSize", "0.001953125"));
-    put(Event::Empty(de));
-    put(Event::Start(BytesStart::new("ModelVariables")));
+    fn empty(&mut self, tag: &str, attributes: &[(&str, &str)]) {
+        let mut e = BytesStart::new(tag);
+        e.extend_attributes(attributes.iter().copied());
+        self.put(Event::Empty(e));
+    }
+    fn end(&mut self, tag: &str) {
+        self.put(Event::End(BytesEnd::new(tag)));
+    }
+}
+
+fn description_xml(p: &Params, guid: &str, generated_at: Option<&str>) -> String {
+    let mut x = Xml(Writer::new_with_indent(Cursor::new(Vec::new()), b' ', 2));
+    x.put(Event::Decl(BytesDecl::new("1.0", Some("UTF-8"), None)));
+    let mut root = vec![
+        ("fmiVersion", "2.0"),
+        ("modelName", MODEL_IDENTIFIER),
+        ("guid", guid),
+        (
+            "description",
+            "Servo-hydraulic uni-axial shake table (EUCENTRE TREES Lab model): three-variable \
+             controller, servovalve, actuator and oil column, table with bearing friction, and \
+             optional specimen, foundation, stick-slip, flow saturation and valve deadband",
+        ),
+        ("author", AUTHOR),
+        ("version", env!("CARGO_PKG_VERSION")),
+        ("copyright", COPYRIGHT),
+        ("license", LICENSE),
+        (
+            "generationTool",
+            concat!("shaketable ", env!("CARGO_PKG_VERSION")),
+        ),
+    ];
+    if let Some(date) = generated_at {
+        root.push(("generationDateAndTime", date));
+    }
+    root.push(("variableNamingConvention", "structured"));
+    root.push(("numberOfEventIndicators", "0"));
+    x.start("fmiModelDescription", &root);
+    co_simulation(&mut x);
+    unit_definitions(&mut x);
+    type_definitions(&mut x);
+    x.empty(
+        "DefaultExperiment",
+        &[
+            ("startTime", "0"),
+            ("stopTime", "10"),
+            ("stepSize", "0.001953125"),
+        ],
+    );
+    x.start("ModelVariables", &[]);
     for v in VARIABLES {
-        let mut e = BytesStart::new("ScalarVariable");
-        e.push_attribute(("name", v.name));
-        e.push_attribute(("valueReference", v.vr.to_string().as_str()));
-        e.push_attribute(("description", v.description));
-        let (causality, variability, initial) = match v.role {
-            Role::Input(_) => ("input", "continuous", None),
-            Role::Output(_) => ("output", "continuous", Some("calculated")),
-            Role::Parameter(..) => ("parameter", "fixed", Some("exact")),
-        };
-        e.push_attribute(("causality", causality));
-        e.push_attribute(("variability", variability));
-        if let Some(i) = initial {
-            e.push_attribute(("initial", i));
-        }
-        put(Event::Start(e));
-        let tag = match v.kind {
-            Kind::Real => "Real",
-            Kind::Integer => "Integer",
-            Kind::Boolean => "Boolean",
-        };
-        let mut t = BytesStart::new(tag);
-        if let Some(u) = v.unit {
-            t.push_attribute(("unit", u));
-        }
-        if !matches!(v.role, Role::Output(_)) {
-            t.push_attribute(("start", start_value(v, p).as_str()));
-        }
-        put(Event::Empty(t));
-        put(Event::End(BytesEnd::new("ScalarVariable")));
+        scalar_variable(&mut x, v, p);
     }
-    put(Event::End(BytesEnd::new("ModelVariables")));
-    put(Event::Start(BytesStart::new("ModelStructure")));
-    for section in ["Outputs", "InitialUnknowns"] {
-        put(Event::Start(BytesStart::new(section)));
-        for (i, v) in VARIABLES.iter().enumerate() {
-            if matches!(v.role, Role::Output(_)) {
-                let mut u = BytesStart::new("Unknown");
-                u.push_attribute(("index", (i + 1).to_string().as_str()));
-                put(Event::Empty(u));
+    x.end("ModelVariables");
+    model_structure(&mut x);
+    x.end("fmiModelDescription");
+    String::from_utf8(x.0.into_inner().into_inner()).unwrap_or_default() + "\n"
+}
+
+fn co_simulation(x: &mut Xml) {
+    x.empty(
+        "CoSimulation",
+        &[
+            ("modelIdentifier", MODEL_IDENTIFIER),
+            ("canHandleVariableCommunicationStepSize", "true"),
+            ("canInterpolateInputs", "true"),
+            ("maxOutputDerivativeOrder", "0"),
+            ("canRunAsynchronuously", "false"),
+            ("canBeInstantiatedOnlyOncePerProcess", "false"),
+            ("canNotUseMemoryManagementFunctions", "true"),
+            ("canGetAndSetFMUstate", "true"),
+            ("canSerializeFMUstate", "true"),
+            ("providesDirectionalDerivative", "false"),
+        ],
+    );
+}
+
+/// The units the variables use, with the display units labs read them in.
+fn unit_definitions(x: &mut Xml) {
+    x.start("UnitDefinitions", &[]);
+    for u in UNITS
+        .iter()
+        .filter(|u| VARIABLES.iter().any(|v| v.unit == Some(u.name)))
+    {
+        x.start("Unit", &[("name", u.name)]);
+        let (kg, m, s) = u.base;
+        let exponents: Vec<(&str, String)> = [("kg", kg), ("m", m), ("s", s)]
+            .into_iter()
+            .filter(|&(_, e)| e != 0)
+            .map(|(k, e)| (k, e.to_string()))
+            .collect();
+        let attributes: Vec<(&str, &str)> =
+            exponents.iter().map(|(k, e)| (*k, e.as_str())).collect();
+        x.empty("BaseUnit", &attributes);
+        if let Some((name, factor)) = u.display {
+            x.empty(
+                "DisplayUnit",
+                &[("name", name), ("factor", &fmt_real(factor))],
+            );
+        }
+        x.end("Unit");
+    }
+    x.end("UnitDefinitions");
+}
+
+/// The enumerations of the structural choices.
+fn type_definitions(x: &mut Xml) {
+    x.start("TypeDefinitions", &[]);
+    for e in VARIABLES.iter().filter_map(|v| v.enumeration) {
+        x.start("SimpleType", &[("name", e.name)]);
+        x.start("Enumeration", &[]);
+        for item in e.items {
+            x.empty(
+                "Item",
+                &[
+                    ("name", item.name),
+                    ("value", &item.value.to_string()),
+                    ("description", item.description),
+                ],
+            );
+        }
+        x.end("Enumeration");
+        x.end("SimpleType");
+    }
+    x.end("TypeDefinitions");
+}
+
+fn scalar_variable(x: &mut Xml, v: &Variable, p: &Params) {
+    let vr = v.vr.to_string();
+    let (causality, variability, initial) = match v.role {
+        Role::Input(_) => ("input", "continuous", None),
+        Role::Output(_) => ("output", "continuous", Some("calculated")),
+        Role::Parameter(..) => ("parameter", "fixed", Some("exact")),
+    };
+    let mut attributes = vec![
+        ("name", v.name),
+        ("valueReference", vr.as_str()),
+        ("description", v.description),
+        ("causality", causality),
+        ("variability", variability),
+    ];
+    if let Some(i) = initial {
+        attributes.push(("initial", i));
+    }
+    x.start("ScalarVariable", &attributes);
+    let mut t: Vec<(&str, String)> = Vec::new();
+    let tag = match (v.kind, v.enumeration) {
+        (Kind::Integer, Some(e)) => {
+            t.push(("declaredType", e.name.into()));
+            "Enumeration"
+        }
+        (Kind::Real, _) => "Real",
+        (Kind::Integer, None) => "Integer",
+        (Kind::Boolean, _) => "Boolean",
+    };
+    if let Some(u) = v.unit {
+        t.push(("unit", u.into()));
+        if let Some((display, _)) = unit(u).and_then(|u| u.display) {
+            t.push(("displayUnit", display.into()));
+        }
+    }
+    if v.kind == Kind::Real {
+        let (min, max) = v
+            .key
+            .and_then(fmu_rule_of)
+            .map(|r| r.bounds())
+            .unwrap_or_default();
+        t.extend(min.map(|m| ("min", fmt_real(m))));
+        t.extend(max.map(|m| ("max", fmt_real(m))));
+    }
+    if !matches!(v.role, Role::Output(_)) {
+        t.push(("start", start_value(v, p)));
+    }
+    let attributes: Vec<(&str, &str)> = t.iter().map(|(k, s)| (*k, s.as_str())).collect();
+    x.empty(tag, &attributes);
+    x.end("ScalarVariable");
+}
+
+/// The 1-based index of the variable in ModelVariables.
+fn index_of(name: &str) -> usize {
+    VARIABLES
+        .iter()
+        .position(|v| v.name == name)
+        .map_or(0, |i| i + 1)
+}
+
+/// Outputs with their exact direct dependencies on the inputs; InitialUnknowns (the
+/// outputs, depending on every parameter at rest).
+fn model_structure(x: &mut Xml) {
+    x.start("ModelStructure", &[]);
+    x.start("Outputs", &[]);
+    for (i, v) in VARIABLES.iter().enumerate() {
+        if matches!(v.role, Role::Output(_)) {
+            let index = (i + 1).to_string();
+            let deps: Vec<String> = v
+                .feedthrough
+                .iter()
+                .map(|f| index_of(INPUTS[f.input]).to_string())
+                .collect();
+            let kinds: Vec<&str> = v.feedthrough.iter().map(|f| f.kind).collect();
+            let (deps, kinds) = (deps.join(" "), kinds.join(" "));
+            let mut attributes = vec![("index", index.as_str()), ("dependencies", deps.as_str())];
+            if !kinds.is_empty() {
+                attributes.push(("dependenciesKind", kinds.as_str()));
             }
+            x.empty("Unknown", &attributes);
         }
-        put(Event::End(BytesEnd::new(section)));
     }
-    put(Event::End(BytesEnd::new("ModelStructure")));
-    put(Event::End(BytesEnd::new("fmiModelDescription")));
-    String::from_utf8(w.into_inner().into_inner()).unwrap_or_default() + "\n"
+    x.end("Outputs");
+    x.start("InitialUnknowns", &[]);
+    for (i, v) in VARIABLES.iter().enumerate() {
+        if matches!(v.role, Role::Output(_)) {
+            x.empty("Unknown", &[("index", &(i + 1).to_string())]);
+        }
+    }
+    x.end("InitialUnknowns");
+    x.end("ModelStructure");
 }
 
 fn escape(s: &str) -> String {

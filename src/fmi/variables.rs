@@ -35,7 +35,78 @@ pub struct Variable {
     pub role: Role,
     pub unit: Option<&'static str>,
     pub description: &'static str,
+    /// Dotted parameter-file key of a parameter (`table.mass_kg`): its validation rule
+    /// gives the FMU's `min`/`max`. `None` for inputs and outputs.
+    pub key: Option<&'static str>,
+    /// The enumeration of a structural choice (set and read as an Integer).
+    pub enumeration: Option<&'static Enumeration>,
+    /// The inputs an output depends on directly (within one instant), with FMI 2.0's
+    /// `dependenciesKind`; empty when the output depends on the state alone.
+    pub feedthrough: &'static [Feedthrough],
 }
+
+/// A direct dependency of an output on an input (ModelStructure `dependencies`).
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct Feedthrough {
+    /// Index into [`INPUTS`].
+    pub input: usize,
+    /// `fixed`: linear with a factor fixed after initialization; `dependent`: nonlinear.
+    pub kind: &'static str,
+}
+
+/// An FMI enumeration type (TypeDefinitions) of a structural parameter.
+#[derive(Debug)]
+pub struct Enumeration {
+    pub name: &'static str,
+    pub items: &'static [EnumerationItem],
+}
+
+/// One item of an [`Enumeration`]: the parameter file's word and its Integer value.
+#[derive(Debug)]
+pub struct EnumerationItem {
+    pub name: &'static str,
+    pub value: i32,
+    pub description: &'static str,
+}
+
+/// The servovalve models (spec section 3); `delay` is not offered in Model Exchange.
+pub static SERVOVALVE_MODELS: Enumeration = Enumeration {
+    name: "ServovalveModel",
+    items: &[
+        EnumerationItem {
+            name: "delay",
+            value: 1,
+            description: "Pure delay of the command (Co-Simulation only)",
+        },
+        EnumerationItem {
+            name: "first_order",
+            value: 2,
+            description: "First-order lag",
+        },
+        EnumerationItem {
+            name: "second_order",
+            value: 3,
+            description: "Second-order spool dynamics",
+        },
+    ],
+};
+
+/// The actuator models (spec section 4).
+pub static ACTUATOR_MODELS: Enumeration = Enumeration {
+    name: "ActuatorModel",
+    items: &[
+        EnumerationItem {
+            name: "ideal",
+            value: 1,
+            description: "Linearised oil column on the load pressure",
+        },
+        EnumerationItem {
+            name: "nonlinear",
+            value: 2,
+            description: "Two chambers with the orifice equation",
+        },
+    ],
+};
 
 /// Names of the inputs, in [`Role::Input`] order.
 pub const INPUTS: [&str; 4] = [
@@ -82,12 +153,12 @@ fn actuator_of(x: f64) -> Option<ActuatorModel> {
     }
 }
 
-/// Whether `value` is allowed for a structural (Integer) parameter.
+/// Whether `value` is allowed for a structural (Integer) parameter: one of its
+/// enumeration's items.
 pub fn integer_allowed(name: &str, value: i32) -> bool {
-    match name {
-        "servovalve.model" => servovalve_of(value as f64).is_some(),
-        "actuator.model" => actuator_of(value as f64).is_some(),
-        _ => true,
+    match by_name(name).and_then(|v| v.enumeration) {
+        Some(e) => e.items.iter().any(|i| i.value == value),
+        None => true,
     }
 }
 
@@ -100,12 +171,18 @@ macro_rules! real_param {
             role: Role::Parameter(|p| p.$($field).+, |p, v| p.$($field).+ = v),
             unit: $unit,
             description: $desc,
+            key: Some(stringify!($($field).+)),
+            enumeration: None,
+            feedthrough: &[],
         }
     };
 }
 
 macro_rules! output {
     ($vr:expr, $name:expr, $unit:expr, $desc:expr, $field:ident) => {
+        output!($vr, $name, $unit, $desc, $field, &[])
+    };
+    ($vr:expr, $name:expr, $unit:expr, $desc:expr, $field:ident, $feedthrough:expr) => {
         Variable {
             vr: $vr,
             name: $name,
@@ -113,6 +190,9 @@ macro_rules! output {
             role: Role::Output(|o| o.$field),
             unit: $unit,
             description: $desc,
+            key: None,
+            enumeration: None,
+            feedthrough: $feedthrough,
         }
     };
 }
@@ -159,6 +239,9 @@ const fn all_variables() -> [Variable; ROW_COUNT] {
             role: Role::Parameter(switch.read, switch.write),
             unit: None,
             description: switch.description,
+            key: Some(switch.dotted_key),
+            enumeration: None,
+            feedthrough: &[],
         };
         n += 1;
         let mut k = 0;
@@ -171,6 +254,9 @@ const fn all_variables() -> [Variable; ROW_COUNT] {
                 role: Role::Parameter(q.read, q.write),
                 unit: q.unit,
                 description: q.description,
+                key: Some(q.dotted_key),
+                enumeration: None,
+                feedthrough: &[],
             };
             n += 1;
             k += 1;
@@ -186,42 +272,89 @@ const fn all_variables() -> [Variable; ROW_COUNT] {
     rows
 }
 
+/// An input row (continuous; interpolated over a step with fmi2SetRealInputDerivatives).
+macro_rules! input {
+    ($vr:expr, $index:expr, $unit:expr, $desc:expr) => {
+        Variable {
+            vr: $vr,
+            name: INPUTS[$index],
+            kind: Kind::Real,
+            role: Role::Input($index),
+            unit: Some($unit),
+            description: $desc,
+            key: None,
+            enumeration: None,
+            feedthrough: &[],
+        }
+    };
+}
+
+/// A structural choice: an Integer on the C side, an Enumeration in the XML.
+macro_rules! choice {
+    ($vr:expr, $name:expr, $enumeration:expr, $desc:expr, $read:expr, $write:expr) => {
+        Variable {
+            vr: $vr,
+            name: $name,
+            kind: Kind::Integer,
+            role: Role::Parameter($read, $write),
+            unit: None,
+            description: $desc,
+            key: Some($name),
+            enumeration: Some(&$enumeration),
+            feedthrough: &[],
+        }
+    };
+}
+
+/// The controller's command reads the three references directly and, through the
+/// acceleration feedback `Ka`, the external force; both through the clip to [-1, 1].
+const VALVE_COMMAND_FEEDTHROUGH: &[Feedthrough] = &[
+    Feedthrough {
+        input: 0,
+        kind: "dependent",
+    },
+    Feedthrough {
+        input: 1,
+        kind: "dependent",
+    },
+    Feedthrough {
+        input: 2,
+        kind: "dependent",
+    },
+    Feedthrough {
+        input: 3,
+        kind: "dependent",
+    },
+];
+
+/// The table's acceleration is `(forces + F_ext) / M`: linear in the external force with
+/// a factor fixed at initialization.
+const ACCELERATION_FEEDTHROUGH: &[Feedthrough] = &[Feedthrough {
+    input: 3,
+    kind: "fixed",
+}];
+
 /// The rows before the effects'.
 const TABLE_VARIABLES: &[Variable] = &[
-    // inputs (continuous; linear interpolation over a step with fmi2SetRealInputDerivatives)
-    Variable {
-        vr: 0,
-        name: "ref_displacement",
-        kind: Kind::Real,
-        role: Role::Input(0),
-        unit: Some("m"),
-        description: "Reference displacement r (spec section 2)",
-    },
-    Variable {
-        vr: 1,
-        name: "ref_velocity",
-        kind: Kind::Real,
-        role: Role::Input(1),
-        unit: Some("m/s"),
-        description: "Reference velocity r'",
-    },
-    Variable {
-        vr: 2,
-        name: "ref_acceleration",
-        kind: Kind::Real,
-        role: Role::Input(2),
-        unit: Some("m/s2"),
-        description: "Reference acceleration r''",
-    },
-    Variable {
-        vr: 3,
-        name: "external_force",
-        kind: Kind::Real,
-        role: Role::Input(3),
-        unit: Some("N"),
-        description: "Force applied to the table by a co-simulated body (e.g. a specimen)",
-    },
-    // outputs
+    input!(0, 0, "m", "Reference displacement the controller tracks"),
+    input!(
+        1,
+        1,
+        "m/s",
+        "Reference velocity (time derivative of the reference displacement)"
+    ),
+    input!(
+        2,
+        2,
+        "m/s2",
+        "Reference acceleration (second derivative of the reference displacement)"
+    ),
+    input!(
+        3,
+        3,
+        "N",
+        "Force a co-simulated body (e.g. a specimen) applies to the table"
+    ),
     output!(
         10,
         "displacement",
@@ -241,49 +374,51 @@ const TABLE_VARIABLES: &[Variable] = &[
         "acceleration",
         Some("m/s2"),
         "Absolute table acceleration",
-        acceleration_m_s2
+        acceleration_m_s2,
+        ACCELERATION_FEEDTHROUGH
     ),
     output!(
         13,
         "actuator_force",
         Some("N"),
-        "Actuator force A (P_a - P_b)",
+        "Actuator force: piston area times the chamber pressure difference",
         actuator_force_n
     ),
     output!(
         14,
         "valve_command",
         None,
-        "Controller command u in [-1, 1]",
-        valve_command
+        "Controller command to the servovalve, clipped to [-1, 1]",
+        valve_command,
+        VALVE_COMMAND_FEEDTHROUGH
     ),
     output!(
         15,
         "spool_position",
         None,
-        "Servovalve spool position x_v (fraction of full stroke)",
+        "Servovalve spool position (fraction of full opening)",
         spool_position
     ),
     output!(
         16,
         "pressure_a",
         Some("Pa"),
-        "Chamber A pressure (ideal actuator: P_s/2 + P_L/2)",
+        "Pressure in actuator chamber A",
         pressure_a_pa
     ),
     output!(
         17,
         "pressure_b",
         Some("Pa"),
-        "Chamber B pressure (ideal actuator: P_s/2 - P_L/2)",
+        "Pressure in actuator chamber B",
         pressure_b_pa
     ),
-    // controller (spec section 2)
+    // controller: three-variable control with delta-P stabilisation
     real_param!(
         100,
         "controller.kp",
         Some("1/m"),
-        "Displacement feedback gain Kp",
+        "Displacement feedback gain Kp (valve command per metre of error)",
         controller.kp
     ),
     real_param!(
@@ -304,177 +439,166 @@ const TABLE_VARIABLES: &[Variable] = &[
         103,
         "controller.fv",
         Some("s/m"),
-        "Velocity feed-forward Fv",
+        "Velocity feed-forward gain Fv",
         controller.fv
     ),
     real_param!(
         104,
         "controller.fa",
         Some("s2/m"),
-        "Acceleration feed-forward Fa",
+        "Acceleration feed-forward gain Fa",
         controller.fa
     ),
     real_param!(
         105,
         "controller.kdp",
         Some("1/N"),
-        "Delta-P (force) stabilisation Kdp",
+        "Delta-P stabilisation gain Kdp (valve command per newton of actuator force)",
         controller.kdp
     ),
-    // servovalve (spec section 3)
-    Variable {
-        vr: 110,
-        name: "servovalve.model",
-        kind: Kind::Integer,
-        role: Role::Parameter(
-            |p| servovalve_code(p.servovalve.model),
-            |p, v| {
-                if let Some(m) = servovalve_of(v) {
-                    p.servovalve.model = m
-                }
-            },
-        ),
-        unit: None,
-        description: "Servovalve model: 1 = delay, 2 = first_order, 3 = second_order",
-    },
+    choice!(
+        110,
+        "servovalve.model",
+        SERVOVALVE_MODELS,
+        "Servovalve dynamics: delay (Co-Simulation only), first_order or second_order",
+        |p| servovalve_code(p.servovalve.model),
+        |p, v| {
+            if let Some(m) = servovalve_of(v) {
+                p.servovalve.model = m
+            }
+        }
+    ),
     real_param!(
         111,
         "servovalve.gain",
         None,
-        "Spool gain Ks",
+        "Spool opening per unit command Ks",
         servovalve.gain
     ),
     real_param!(
         112,
         "servovalve.time_constant",
         Some("s"),
-        "Time constant (first order) or delay (delay model) tau",
+        "Time constant of the first-order valve, or the delay of the delay valve",
         servovalve.time_constant_s
     ),
     real_param!(
         113,
         "servovalve.natural_frequency",
         Some("Hz"),
-        "Natural frequency f_v (second order)",
+        "Natural frequency of the second-order valve",
         servovalve.natural_frequency_hz
     ),
     real_param!(
         114,
         "servovalve.damping_ratio",
         None,
-        "Damping ratio xi (second order)",
+        "Damping ratio of the second-order valve",
         servovalve.damping_ratio
     ),
-    // actuator and oil column (spec section 4)
-    Variable {
-        vr: 120,
-        name: "actuator.model",
-        kind: Kind::Integer,
-        role: Role::Parameter(
-            |p| {
-                if p.actuator.model == ActuatorModel::Ideal {
-                    1.0
-                } else {
-                    2.0
-                }
-            },
-            |p, v| {
-                if let Some(m) = actuator_of(v) {
-                    p.actuator.model = m
-                }
-            },
-        ),
-        unit: None,
-        description: "Actuator model: 1 = ideal, 2 = nonlinear",
-    },
+    choice!(
+        120,
+        "actuator.model",
+        ACTUATOR_MODELS,
+        "Actuator: ideal (linearised oil column) or nonlinear (two chambers, orifice flow)",
+        |p| if p.actuator.model == ActuatorModel::Ideal {
+            1.0
+        } else {
+            2.0
+        },
+        |p, v| {
+            if let Some(m) = actuator_of(v) {
+                p.actuator.model = m
+            }
+        }
+    ),
     real_param!(
         121,
         "actuator.piston_area",
         Some("m2"),
-        "Piston area A",
+        "Effective piston area",
         actuator.piston_area_m2
     ),
     real_param!(
         122,
         "actuator.total_oil_volume",
         Some("m3"),
-        "Total oil volume V_t",
+        "Oil volume of both chambers and their lines",
         actuator.total_oil_volume_m3
     ),
     real_param!(
         123,
         "actuator.leakage",
         Some("m3/(s.Pa)"),
-        "Cross-port leakage C_l",
+        "Cross-port leakage coefficient (flow per pressure difference)",
         actuator.leakage_m3_s_pa
     ),
     real_param!(
         124,
         "actuator.supply_pressure",
         Some("Pa"),
-        "Supply pressure P_s",
+        "Hydraulic supply pressure",
         actuator.supply_pressure_pa
     ),
     real_param!(
         125,
         "oil_column.bulk_modulus",
         Some("Pa"),
-        "Effective bulk modulus beta",
+        "Effective bulk modulus of the oil (with hoses and entrained air)",
         actuator.bulk_modulus_pa
     ),
     real_param!(
         126,
         "valve.flow_gain",
         Some("m3/s"),
-        "Valve flow gain Kq per unit spool",
+        "Servovalve flow at full opening",
         actuator.flow_gain_m3_s
     ),
-    // payload and friction (spec section 5)
     real_param!(
         130,
         "table.mass",
         Some("kg"),
-        "Rigid table mass M",
+        "Moving mass of the table and its payload",
         table.mass_kg
     ),
     real_param!(
         131,
         "table.stiffness",
         Some("N/m"),
-        "Horizontal stiffness k_h",
+        "Horizontal stiffness holding the table (bearings, centring springs)",
         table.stiffness_n_m
     ),
     real_param!(
         132,
         "friction.force",
         Some("N"),
-        "Bouc-Wen friction amplitude F_mu",
+        "Sliding friction force of the bearings",
         friction.force_n
     ),
     real_param!(
         133,
         "friction.yield_displacement",
         Some("m"),
-        "Bouc-Wen yield displacement Y",
+        "Pre-sliding displacement before friction is fully developed",
         friction.yield_displacement_m
     ),
     real_param!(
         134,
         "friction.shape",
         None,
-        "Bouc-Wen shape constant b in [0, 1)",
+        "Shape of the friction loop (Bouc-Wen b, from 0 to just under 1)",
         friction.shape
     ),
 ];
 
-/// The rows after the effects'.
+/// The rows after the effects': the operating limits (fmi2DoStep stops beyond them with
+/// fmi2Error).
 const LIMIT_VARIABLES: &[Variable] = &[
-    // operating limits (spec section 8): fmi2DoStep stops beyond them with fmi2Error
     real_param!(
         190,
         "limits.stroke",
         Some("m"),
-        "Stroke: a step whose LVDT displacement passes 1.1 times it is an error",
+        "Actuator stroke: a step whose LVDT displacement passes 1.1 times it is an error",
         limits.stroke_m
     ),
     real_param!(
@@ -496,28 +620,112 @@ pub fn by_name(name: &str) -> Option<&'static Variable> {
     VARIABLES.iter().find(|v| v.name == name)
 }
 
-/// SI base-unit exponents (kg, m, s) of every unit the table uses, for UnitDefinitions.
-pub fn unit_exponents(unit: &str) -> Option<(i32, i32, i32)> {
-    Some(match unit {
-        "m" => (0, 1, 0),
-        "m/s" => (0, 1, -1),
-        "m/s2" => (0, 1, -2),
-        "N" => (1, 1, -2),
-        "Pa" => (1, -1, -2),
-        "kg" => (1, 0, 0),
-        "N/m" => (1, 0, -2),
-        "m2" => (0, 2, 0),
-        "m3" => (0, 3, 0),
-        "m3/s" => (0, 3, -1),
-        "m3/(s.Pa)" => (-1, 4, 1),
-        "s" => (0, 0, 1),
-        "Hz" => (0, 0, -1),
-        "1/m" => (0, -1, 0),
-        "s/m" => (0, -1, 1),
-        "s2/m" => (0, -1, 2),
-        "1/N" => (-1, -1, 2),
-        _ => return None,
-    })
+/// One unit of the table: its SI base-unit exponents and the display unit labs read it
+/// in (`display = factor * value`), for UnitDefinitions and each variable's `displayUnit`.
+#[derive(Debug, Clone, Copy)]
+pub struct Unit {
+    pub name: &'static str,
+    /// Exponents of kg, m and s.
+    pub base: (i32, i32, i32),
+    /// `(name, factor)` of the display unit.
+    pub display: Option<(&'static str, f64)>,
+}
+
+/// Standard gravity, m/s^2: the `g` display unit of accelerations.
+const STANDARD_GRAVITY_M_S2: f64 = 9.80665;
+
+/// Every unit the variables use.
+pub const UNITS: &[Unit] = &[
+    Unit {
+        name: "m",
+        base: (0, 1, 0),
+        display: Some(("mm", 1e3)),
+    },
+    Unit {
+        name: "m/s",
+        base: (0, 1, -1),
+        display: Some(("mm/s", 1e3)),
+    },
+    Unit {
+        name: "m/s2",
+        base: (0, 1, -2),
+        display: Some(("g", 1.0 / STANDARD_GRAVITY_M_S2)),
+    },
+    Unit {
+        name: "N",
+        base: (1, 1, -2),
+        display: Some(("kN", 1e-3)),
+    },
+    Unit {
+        name: "Pa",
+        base: (1, -1, -2),
+        display: Some(("bar", 1e-5)),
+    },
+    Unit {
+        name: "kg",
+        base: (1, 0, 0),
+        display: Some(("t", 1e-3)),
+    },
+    Unit {
+        name: "N/m",
+        base: (1, 0, -2),
+        display: Some(("kN/mm", 1e-6)),
+    },
+    Unit {
+        name: "m2",
+        base: (0, 2, 0),
+        display: Some(("cm2", 1e4)),
+    },
+    Unit {
+        name: "m3",
+        base: (0, 3, 0),
+        display: Some(("l", 1e3)),
+    },
+    Unit {
+        name: "m3/s",
+        base: (0, 3, -1),
+        display: Some(("l/min", 6e4)),
+    },
+    Unit {
+        name: "m3/(s.Pa)",
+        base: (-1, 4, 1),
+        display: None,
+    },
+    Unit {
+        name: "s",
+        base: (0, 0, 1),
+        display: Some(("ms", 1e3)),
+    },
+    Unit {
+        name: "Hz",
+        base: (0, 0, -1),
+        display: None,
+    },
+    Unit {
+        name: "1/m",
+        base: (0, -1, 0),
+        display: None,
+    },
+    Unit {
+        name: "s/m",
+        base: (0, -1, 1),
+        display: None,
+    },
+    Unit {
+        name: "s2/m",
+        base: (0, -1, 2),
+        display: None,
+    },
+    Unit {
+        name: "1/N",
+        base: (-1, -1, 2),
+        display: None,
+    },
+];
+
+/// The unit named `name`.
+pub fn unit(name: &str) -> Option<&'static Unit> {
+    UNITS.iter().find(|u| u.name == name)
 }
 
 #[cfg(test)]
@@ -532,7 +740,7 @@ mod tests {
                 assert_ne!(a.name, b.name);
             }
             if let Some(u) = a.unit {
-                assert!(unit_exponents(u).is_some(), "{u}");
+                assert!(unit(u).is_some(), "{u}");
             }
         }
     }
@@ -565,5 +773,38 @@ mod tests {
                 );
             }
         }
+    }
+
+    /// Every Real parameter names its parameter-file key, and that key has a validation
+    /// rule (the FMU's min/max); every numeric key of the file has its variable.
+    #[test]
+    fn every_real_parameter_has_its_key_and_rule() {
+        let entries = Params::trees_lab().numeric_entries();
+        for v in VARIABLES {
+            if let (Role::Parameter(get, _), Kind::Real) = (v.role, v.kind) {
+                let key = v.key.unwrap_or_else(|| panic!("{} has no key", v.name));
+                let (_, value) = entries.iter().find(|(k, _)| *k == key).unwrap();
+                assert_eq!(*value, get(&Params::trees_lab()), "{key}");
+                assert!(
+                    crate::params::fmu_rule_of(key).is_some(),
+                    "{key} has no rule"
+                );
+            }
+        }
+        for (key, _) in entries {
+            assert!(
+                VARIABLES.iter().any(|v| v.key == Some(key)),
+                "{key} has no variable"
+            );
+        }
+    }
+
+    /// The structural choices accept exactly their enumeration's items.
+    #[test]
+    fn enumerations_bound_the_structural_choices() {
+        assert!(integer_allowed("servovalve.model", 3));
+        assert!(!integer_allowed("servovalve.model", 4));
+        assert!(integer_allowed("actuator.model", 2));
+        assert!(!integer_allowed("actuator.model", 0));
     }
 }

@@ -5,7 +5,7 @@
 
 use fmi_sys::fmi2::*;
 use shaketable::fmi::export::*;
-use shaketable::fmi::model_description::GUID;
+use shaketable::fmi::model_description::guid;
 use std::ffi::CString;
 use std::sync::{Mutex, Once};
 
@@ -60,8 +60,14 @@ pub struct Fmu {
 }
 
 impl Fmu {
-    /// Instantiate with `resources` as the raw location bytes (None: a null pointer).
+    /// Instantiate with `resources` as the raw location bytes (None: a null pointer) and
+    /// the GUID of the TREES Lab defaults' description.
     pub fn open(name: &str, resources: Option<&[u8]>) -> Option<Fmu> {
+        Fmu::open_as(name, resources, &guid(&shaketable::Params::trees_lab()))
+    }
+
+    /// Instantiate with the GUID `fmu_guid` (a description's, or a wrong one).
+    pub fn open_as(name: &str, resources: Option<&[u8]>, fmu_guid: &str) -> Option<Fmu> {
         setup();
         let cb = Box::new(fmi2CallbackFunctions {
             logger: Some(fmi_sys::fmi2::logger::callback_logger_handler),
@@ -71,7 +77,7 @@ impl Fmu {
             componentEnvironment: std::ptr::null_mut(),
         });
         let n = CString::new(name).unwrap();
-        let guid = CString::new(GUID).unwrap();
+        let guid = CString::new(fmu_guid).unwrap();
         let res = resources.map(|r| CString::new(r).unwrap());
         let c = unsafe {
             fmi2Instantiate(

@@ -17,6 +17,18 @@ enum What {
         /// Parameter file whose values become the start values (defaults when omitted).
         #[arg(long)]
         params: Option<PathBuf>,
+        /// `generationDateAndTime` (ISO 8601 UTC, e.g. 2026-11-24T18:00:00Z); omitted when
+        /// not given, so the committed copy is reproducible.
+        #[arg(long, value_name = "DATE")]
+        generated_at: Option<String>,
+    },
+    /// Write model.png, the FMU's icon.
+    Icon {
+        #[arg(long, value_name = "PNG")]
+        out: PathBuf,
+        /// Replace --out if it exists.
+        #[arg(long)]
+        force: bool,
     },
     /// Print documentation/index.html (the variable table).
     Documentation {
@@ -32,12 +44,29 @@ enum What {
 }
 
 pub fn run(args: Args) -> anyhow::Result<()> {
-    use shaketable::fmi::model_description::{documentation_html, model_description_xml};
+    use shaketable::fmi::model_description::{
+        documentation_html, model_description_xml, model_description_xml_at,
+    };
     match args.what {
-        What::Description { params } => print!(
-            "{}",
-            model_description_xml(&crate::load_params(params.as_deref())?)
-        ),
+        What::Description {
+            params,
+            generated_at,
+        } => {
+            let p = crate::load_params(params.as_deref())?;
+            match generated_at {
+                Some(date) => {
+                    check_date(&date)?;
+                    print!("{}", model_description_xml_at(&p, &date))
+                }
+                None => print!("{}", model_description_xml(&p)),
+            }
+        }
+        What::Icon { out, force } => {
+            use shaketable::output::{check_file, write_via_temp, Inputs};
+            check_file(&out, force, &Inputs::new())?;
+            write_via_temp(&out, shaketable::fmi::icon::draw_icon, |e| e.to_string())
+                .map_err(|e| anyhow::anyhow!("{}: {e}", out.display()))?;
+        }
         What::Documentation { params } => print!(
             "{}",
             documentation_html(&crate::load_params(params.as_deref())?)
@@ -60,5 +89,30 @@ pub fn run(args: Args) -> anyhow::Result<()> {
             println!("{}", serde_json::to_string_pretty(&values)?);
         }
     }
+    Ok(())
+}
+
+/// `generationDateAndTime` is an xs:dateTime: refuse anything else before it reaches the XML.
+fn check_date(date: &str) -> anyhow::Result<()> {
+    let b = date.as_bytes();
+    let digits =
+        |r: std::ops::Range<usize>| r.clone().all(|i| b.get(i).is_some_and(u8::is_ascii_digit));
+    let shape = b.len() == 20
+        && digits(0..4)
+        && b[4] == b'-'
+        && digits(5..7)
+        && b[7] == b'-'
+        && digits(8..10)
+        && b[10] == b'T'
+        && digits(11..13)
+        && b[13] == b':'
+        && digits(14..16)
+        && b[16] == b':'
+        && digits(17..19)
+        && b[19] == b'Z';
+    anyhow::ensure!(
+        shape,
+        "--generated-at `{date}` is not a UTC date and time like 2026-11-24T18:00:00Z"
+    );
     Ok(())
 }
