@@ -146,6 +146,20 @@ impl Simulator {
             .outputs(&self.state, inp, noise, self.delayed_command(self.time_s))
     }
 
+    /// The state derivatives at the current time for the given inputs (noise-free): what
+    /// a Model Exchange importer integrates.
+    pub fn derivatives_now(&self, inp: &Inputs) -> State {
+        let mut ds = [0.0; NX];
+        self.model.derivatives(
+            &self.state,
+            inp,
+            &SensorNoise::default(),
+            self.delayed_command(self.time_s),
+            &mut ds,
+        );
+        ds
+    }
+
     #[inline]
     fn record_command(&mut self, inp: &Inputs, noise: &SensorNoise) {
         if self.model.has_delay() {

@@ -233,9 +233,11 @@ fn bad_calls_are_errors_with_messages() {
             0
         )
         .is_null());
+        // an fmuType that is neither Model Exchange nor Co-Simulation
+        let neither: fmi2Type = 7;
         assert!(fmi2Instantiate(
             n.as_ptr(),
-            fmi2Type_fmi2ModelExchange,
+            neither,
             CString::new(description_guid(&shaketable::Params::trees_lab()))
                 .unwrap()
                 .as_ptr(),

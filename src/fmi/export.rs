@@ -6,7 +6,7 @@
 #![allow(non_snake_case, clippy::missing_safety_doc)]
 
 use super::instance::{
-    deserialize, fmi_name_of_key, serialize, FmiError, Instance, Phase, Snapshot,
+    deserialize, fmi_name_of_key, serialize, FmiError, Instance, Interface, Phase, Snapshot,
 };
 use super::model_description::guid as description_guid;
 use super::variables::Kind;
@@ -15,15 +15,15 @@ use fmi_sys::fmi2::*;
 use std::ffi::{c_char, CStr, CString};
 use std::panic::{catch_unwind, AssertUnwindSafe};
 
-const OK: fmi2Status = fmi2Status_fmi2OK;
+pub(super) const OK: fmi2Status = fmi2Status_fmi2OK;
 const WARNING: fmi2Status = fmi2Status_fmi2Warning;
 const DISCARD: fmi2Status = fmi2Status_fmi2Discard;
-const ERROR: fmi2Status = fmi2Status_fmi2Error;
+pub(super) const ERROR: fmi2Status = fmi2Status_fmi2Error;
 const FATAL: fmi2Status = fmi2Status_fmi2Fatal;
 
 /// The C-side component: the instance plus the importer's callbacks.
-struct Component {
-    instance: Instance,
+pub(super) struct Component {
+    pub(super) instance: Instance,
     logger: fmi2CallbackLogger,
     environment: fmi2ComponentEnvironment,
     name: CString,
@@ -55,7 +55,7 @@ impl Component {
         ERROR
     }
 
-    fn result(&mut self, r: Result<(), FmiError>) -> fmi2Status {
+    pub(super) fn result(&mut self, r: Result<(), FmiError>) -> fmi2Status {
         match r {
             Ok(()) => OK,
             Err(e) => self.fail(e),
@@ -64,7 +64,10 @@ impl Component {
 }
 
 /// Run `f` on the component, turning a null component and any panic into fmi2Error/Fatal.
-unsafe fn with(c: fmi2Component, f: impl FnOnce(&mut Component) -> fmi2Status) -> fmi2Status {
+pub(super) unsafe fn with(
+    c: fmi2Component,
+    f: impl FnOnce(&mut Component) -> fmi2Status,
+) -> fmi2Status {
     if c.is_null() {
         return ERROR;
     }
@@ -84,7 +87,7 @@ unsafe fn with(c: fmi2Component, f: impl FnOnce(&mut Component) -> fmi2Status) -
 }
 
 /// A slice from an FMI array argument; `None` for a null pointer with a non-zero length.
-unsafe fn slice<'a, T>(p: *const T, n: usize) -> Option<&'a [T]> {
+pub(super) unsafe fn slice<'a, T>(p: *const T, n: usize) -> Option<&'a [T]> {
     if n == 0 {
         Some(&[])
     } else if p.is_null() {
@@ -95,7 +98,7 @@ unsafe fn slice<'a, T>(p: *const T, n: usize) -> Option<&'a [T]> {
     }
 }
 
-unsafe fn slice_mut<'a, T>(p: *mut T, n: usize) -> Option<&'a mut [T]> {
+pub(super) unsafe fn slice_mut<'a, T>(p: *mut T, n: usize) -> Option<&'a mut [T]> {
     if n == 0 {
         Some(&mut [])
     } else if p.is_null() {
@@ -106,7 +109,7 @@ unsafe fn slice_mut<'a, T>(p: *mut T, n: usize) -> Option<&'a mut [T]> {
     }
 }
 
-fn null_arg(comp: &mut Component, function: &'static str, what: &str) -> fmi2Status {
+pub(super) fn null_arg(comp: &mut Component, function: &'static str, what: &str) -> fmi2Status {
     comp.fail(FmiError {
         function,
         message: format!("{what} is a null pointer"),
@@ -359,11 +362,15 @@ fn instantiate(
     if comp.instance.name.is_empty() {
         return Err("instanceName is null or empty".into());
     }
-    if fmu_type != fmi2Type_fmi2CoSimulation {
-        return Err(format!(
-            "fmuType {fmu_type}: this FMU is Co-Simulation only"
-        ));
-    }
+    let interface = match fmu_type {
+        x if x == fmi2Type_fmi2CoSimulation => Interface::CoSimulation,
+        x if x == fmi2Type_fmi2ModelExchange => Interface::ModelExchange,
+        other => {
+            return Err(format!(
+                "fmuType {other} is neither fmi2ModelExchange nor fmi2CoSimulation"
+            ))
+        }
+    };
     let (params, warning) =
         start_params(resources).map_err(|e| format!("resources/parameters.toml: {e}"))?;
     // the GUID names the description of these start values (one per parameter file)
@@ -383,6 +390,7 @@ fn instantiate(
         );
     }
     comp.instance = Instance::new(&comp.instance.name, params);
+    comp.instance.interface = interface;
     Ok(())
 }
 

@@ -8,14 +8,32 @@ use crate::params::{Params, ParamsError};
 use crate::solver::{CommandHistory, Simulator, DEFAULT_MAX_SUBSTEP_S};
 use crate::Model;
 
-/// FMI 2.0 Co-Simulation states.
+/// FMI 2.0 states: Co-Simulation steps in `StepComplete`; Model Exchange alternates
+/// `EventMode` and `ContinuousTimeMode`.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, serde::Serialize, serde::Deserialize)]
 pub enum Phase {
     Instantiated,
     InitializationMode,
     StepComplete,
+    EventMode,
+    ContinuousTimeMode,
     Terminated,
     Error,
+}
+
+/// The phases after initialization in which a simulation runs (either interface).
+pub const RUNNING: [Phase; 3] = [
+    Phase::StepComplete,
+    Phase::EventMode,
+    Phase::ContinuousTimeMode,
+];
+
+/// Which FMI interface the importer instantiated.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+pub enum Interface {
+    #[default]
+    CoSimulation,
+    ModelExchange,
 }
 
 /// A refused call: the FMI function and what was wrong.
@@ -128,6 +146,7 @@ pub struct Instance {
     pub input_slopes: [f64; 4],
     pub sim: Option<Simulator>,
     pub logging_on: bool,
+    pub interface: Interface,
 }
 
 fn err<T>(function: &'static str, message: impl Into<String>) -> Result<T> {
@@ -150,6 +169,7 @@ impl Instance {
             input_slopes: [0.0; 4],
             sim: None,
             logging_on: false,
+            interface: Interface::CoSimulation,
         }
     }
 
@@ -195,18 +215,31 @@ impl Instance {
         if let Err(e) = self.params.validate() {
             return err(F, format!("invalid parameters: {}", params_message(&e)));
         }
+        if self.interface == Interface::ModelExchange
+            && self.params.servovalve.model == crate::params::ServovalveModel::Delay
+        {
+            return err(
+                F,
+                "servovalve.model = delay is not offered in Model Exchange: a pure delay \
+                 needs the command's history, which an external integrator does not keep; \
+                 use first_order or second_order, or the Co-Simulation interface",
+            );
+        }
         self.sim = Some(Simulator::new(
             Model::new(&self.params),
             self.start_time_s,
             DEFAULT_MAX_SUBSTEP_S,
         ));
         self.time_s = self.start_time_s;
-        self.phase = Phase::StepComplete;
+        self.phase = match self.interface {
+            Interface::CoSimulation => Phase::StepComplete,
+            Interface::ModelExchange => Phase::EventMode,
+        };
         Ok(())
     }
 
     pub fn terminate(&mut self) -> Result<()> {
-        self.allowed("fmi2Terminate", &[Phase::StepComplete])?;
+        self.allowed("fmi2Terminate", &RUNNING)?;
         self.phase = Phase::Terminated;
         Ok(())
     }
@@ -214,20 +247,28 @@ impl Instance {
     /// Back to the instantiated state with the start values.
     pub fn reset(&mut self) {
         let (name, logging, start) = (self.name.clone(), self.logging_on, self.start_params);
+        let interface = self.interface;
         *self = Instance::new(&name, start);
         self.logging_on = logging;
+        self.interface = interface;
+    }
+
+    /// The running simulation, or the table at rest before initialization is complete.
+    pub(super) fn simulation(&self) -> std::borrow::Cow<'_, Simulator> {
+        match &self.sim {
+            Some(s) => std::borrow::Cow::Borrowed(s),
+            None => std::borrow::Cow::Owned(Simulator::new(
+                Model::new(&self.params),
+                self.time_s,
+                DEFAULT_MAX_SUBSTEP_S,
+            )),
+        }
     }
 
     /// Current readings (outputs at rest before initialization is complete).
     fn outputs(&self) -> crate::Outputs {
         let inp = inputs_from(&self.inputs);
-        match &self.sim {
-            Some(s) => s.outputs(&inp, &SensorNoise::default()),
-            None => {
-                let m = Model::new(&self.params);
-                m.outputs(&m.rest_state(), &inp, &SensorNoise::default(), 0.0)
-            }
-        }
+        self.simulation().outputs(&inp, &SensorNoise::default())
     }
 
     fn variable(
@@ -261,26 +302,29 @@ impl Instance {
             &[
                 Phase::InitializationMode,
                 Phase::StepComplete,
+                Phase::EventMode,
+                Phase::ContinuousTimeMode,
                 Phase::Terminated,
                 Phase::Error,
             ],
         )?;
-        let needs_outputs = vrs.iter().any(|&vr| {
-            by_vr(vr)
-                .map(|v| matches!(v.role, Role::Output(_)))
-                .unwrap_or(false)
+        let needs =
+            |f: fn(&Role) -> bool| vrs.iter().any(|&vr| by_vr(vr).is_some_and(|v| f(&v.role)));
+        let o = needs(|r| matches!(r, Role::Output(_))).then(|| self.outputs());
+        let sim =
+            needs(|r| matches!(r, Role::State(_) | Role::Derivative(_))).then(|| self.simulation());
+        let ds = needs(|r| matches!(r, Role::Derivative(_))).then(|| {
+            let inp = inputs_from(&self.inputs);
+            sim.as_ref().map(|s| s.derivatives_now(&inp))
         });
-        let o = if needs_outputs {
-            Some(self.outputs())
-        } else {
-            None
-        };
         for (i, &vr) in vrs.iter().enumerate() {
             let v = Self::variable(function, vr, kind)?;
             out[i] = match v.role {
                 Role::Input(k) => self.inputs[k],
                 Role::Output(f) => o.as_ref().map(f).unwrap_or(f64::NAN),
                 Role::Parameter(get, _) => get(&self.params),
+                Role::State(k) => sim.as_ref().map_or(f64::NAN, |s| s.state[k]),
+                Role::Derivative(k) => ds.flatten().map_or(f64::NAN, |d| d[k]),
             };
         }
         Ok(())
@@ -300,6 +344,8 @@ impl Instance {
                 Phase::Instantiated,
                 Phase::InitializationMode,
                 Phase::StepComplete,
+                Phase::EventMode,
+                Phase::ContinuousTimeMode,
             ],
         )?;
         let mut params = self.params;
@@ -322,8 +368,18 @@ impl Instance {
                         format!("{} is an output and cannot be set", v.name),
                     )
                 }
+                Role::State(_) | Role::Derivative(_) => {
+                    return err(
+                        function,
+                        format!(
+                            "{} is a local variable of the model: states are set with \
+                             fmi2SetContinuousStates (Model Exchange)",
+                            v.name
+                        ),
+                    )
+                }
                 Role::Parameter(_, set) => {
-                    if self.phase == Phase::StepComplete {
+                    if RUNNING.contains(&self.phase) {
                         return err(
                             function,
                             format!(
@@ -475,6 +531,8 @@ impl Instance {
                 Phase::Instantiated,
                 Phase::InitializationMode,
                 Phase::StepComplete,
+                Phase::EventMode,
+                Phase::ContinuousTimeMode,
                 Phase::Terminated,
                 Phase::Error,
             ],

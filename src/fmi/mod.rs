@@ -6,7 +6,10 @@
 //! the C ABI (built into the crate's cdylib, packaged as `binaries/linux64/ShakeTable.so`).
 
 pub mod export;
+pub mod export_me;
 pub mod icon;
 pub mod instance;
 pub mod model_description;
+pub mod model_exchange;
+pub mod structure;
 pub mod variables;

@@ -1,6 +1,8 @@
 //! `modelDescription.xml` and the documentation page, generated from the variable table
 //! ([`super::variables::VARIABLES`]) with the start values of a parameter set.
 
+use super::model_exchange::EVENT_INDICATOR_COUNT;
+use super::structure::output_state_dependencies;
 use super::variables::{unit, Kind, Role, Variable, INPUTS, UNITS, VARIABLES};
 use crate::model::Model;
 use crate::params::{fmu_rule_of, Params};
@@ -46,7 +48,14 @@ pub fn start_value(v: &Variable, p: &Params) -> String {
             Kind::Integer => format!("{}", get(p) as i64),
             Kind::Boolean => (if get(p) != 0.0 { "true" } else { "false" }).into(),
         },
+        Role::State(k) => fmt_real(Model::new(p).rest_state()[k]),
+        Role::Derivative(_) => "0".into(),
     }
+}
+
+/// Whether the variable declares a start value (calculated ones may not, FMI 2.0 2.2.7).
+pub fn declares_start(v: &Variable) -> bool {
+    matches!(v.role, Role::Input(_) | Role::Parameter(..))
 }
 
 /// The GUID of the description for parameters `p`: a UUID v5 of its text (without the
@@ -120,8 +129,10 @@ fn description_xml(p: &Params, guid: &str, generated_at: Option<&str>) -> String
         root.push(("generationDateAndTime", date));
     }
     root.push(("variableNamingConvention", "structured"));
-    root.push(("numberOfEventIndicators", "0"));
+    let indicators = EVENT_INDICATOR_COUNT.to_string();
+    root.push(("numberOfEventIndicators", &indicators));
     x.start("fmiModelDescription", &root);
+    model_exchange(&mut x);
     co_simulation(&mut x);
     unit_definitions(&mut x);
     type_definitions(&mut x);
@@ -141,6 +152,21 @@ fn description_xml(p: &Params, guid: &str, generated_at: Option<&str>) -> String
     model_structure(&mut x);
     x.end("fmiModelDescription");
     String::from_utf8(x.0.into_inner().into_inner()).unwrap_or_default() + "\n"
+}
+
+fn model_exchange(x: &mut Xml) {
+    x.empty(
+        "ModelExchange",
+        &[
+            ("modelIdentifier", MODEL_IDENTIFIER),
+            ("completedIntegratorStepNotNeeded", "false"),
+            ("canBeInstantiatedOnlyOncePerProcess", "false"),
+            ("canNotUseMemoryManagementFunctions", "true"),
+            ("canGetAndSetFMUstate", "true"),
+            ("canSerializeFMUstate", "true"),
+            ("providesDirectionalDerivative", "false"),
+        ],
+    );
 }
 
 fn co_simulation(x: &mut Xml) {
@@ -217,6 +243,7 @@ fn scalar_variable(x: &mut Xml, v: &Variable, p: &Params) {
         Role::Input(_) => ("input", "continuous", None),
         Role::Output(_) => ("output", "continuous", Some("calculated")),
         Role::Parameter(..) => ("parameter", "fixed", Some("exact")),
+        Role::State(_) | Role::Derivative(_) => ("local", "continuous", Some("calculated")),
     };
     let mut attributes = vec![
         ("name", v.name),
@@ -254,7 +281,10 @@ fn scalar_variable(x: &mut Xml, v: &Variable, p: &Params) {
         t.extend(min.map(|m| ("min", fmt_real(m))));
         t.extend(max.map(|m| ("max", fmt_real(m))));
     }
-    if !matches!(v.role, Role::Output(_)) {
+    if let Role::Derivative(k) = v.role {
+        t.push(("derivative", state_index(k).to_string()));
+    }
+    if declares_start(v) {
         t.push(("start", start_value(v, p)));
     }
     let attributes: Vec<(&str, &str)> = t.iter().map(|(k, s)| (*k, s.as_str())).collect();
@@ -270,21 +300,38 @@ fn index_of(name: &str) -> usize {
         .map_or(0, |i| i + 1)
 }
 
-/// Outputs with their exact direct dependencies on the inputs; InitialUnknowns (the
-/// outputs, depending on every parameter at rest).
+/// The 1-based index of the variable of state `k`.
+fn state_index(k: usize) -> usize {
+    VARIABLES
+        .iter()
+        .position(|v| matches!(v.role, Role::State(j) if j == k))
+        .map_or(0, |i| i + 1)
+}
+
+/// Outputs with their exact direct dependencies on the inputs and the states they read;
+/// the state derivatives; InitialUnknowns (outputs, states and derivatives, calculated
+/// from every parameter at rest).
 fn model_structure(x: &mut Xml) {
     x.start("ModelStructure", &[]);
     x.start("Outputs", &[]);
     for (i, v) in VARIABLES.iter().enumerate() {
-        if matches!(v.role, Role::Output(_)) {
-            let index = (i + 1).to_string();
-            let deps: Vec<String> = v
+        if let Role::Output(read) = v.role {
+            let mut known: Vec<(usize, &str)> = v
                 .feedthrough
                 .iter()
-                .map(|f| index_of(INPUTS[f.input]).to_string())
+                .map(|f| (index_of(INPUTS[f.input]), f.kind))
                 .collect();
-            let kinds: Vec<&str> = v.feedthrough.iter().map(|f| f.kind).collect();
+            // a state enters an output through the model's nonlinear algebra
+            known.extend(
+                output_state_dependencies(read)
+                    .into_iter()
+                    .map(|k| (state_index(k), "dependent")),
+            );
+            known.sort_unstable();
+            let deps: Vec<String> = known.iter().map(|(i, _)| i.to_string()).collect();
+            let kinds: Vec<&str> = known.iter().map(|(_, k)| *k).collect();
             let (deps, kinds) = (deps.join(" "), kinds.join(" "));
+            let index = (i + 1).to_string();
             let mut attributes = vec![("index", index.as_str()), ("dependencies", deps.as_str())];
             if !kinds.is_empty() {
                 attributes.push(("dependenciesKind", kinds.as_str()));
@@ -293,9 +340,19 @@ fn model_structure(x: &mut Xml) {
         }
     }
     x.end("Outputs");
+    x.start("Derivatives", &[]);
+    for (i, v) in VARIABLES.iter().enumerate() {
+        if matches!(v.role, Role::Derivative(_)) {
+            x.empty("Unknown", &[("index", &(i + 1).to_string())]);
+        }
+    }
+    x.end("Derivatives");
     x.start("InitialUnknowns", &[]);
     for (i, v) in VARIABLES.iter().enumerate() {
-        if matches!(v.role, Role::Output(_)) {
+        if matches!(
+            v.role,
+            Role::Output(_) | Role::State(_) | Role::Derivative(_)
+        ) {
             x.empty("Unknown", &[("index", &(i + 1).to_string())]);
         }
     }
@@ -326,6 +383,7 @@ pub fn documentation_html(p: &Params) -> String {
             Role::Input(_) => "input",
             Role::Output(_) => "output",
             Role::Parameter(..) => "parameter",
+            Role::State(_) | Role::Derivative(_) => "local",
         };
         h.push_str(&format!(
             "<tr><td>{}</td><td>{}</td><td>{}</td><td>{:?}</td><td>{}</td><td>{}</td><td>{}</td></tr>",
@@ -334,7 +392,7 @@ pub fn documentation_html(p: &Params) -> String {
             causality,
             v.kind,
             v.unit.unwrap_or(""),
-            if matches!(v.role, Role::Output(_)) { String::new() } else { start_value(v, p) },
+            if declares_start(v) { start_value(v, p) } else { String::new() },
             escape(v.description)
         ));
     }

@@ -24,6 +24,11 @@ pub enum Role {
     /// Fixed parameter: read and write the parameter block (Integer and Boolean values
     /// travel as f64 here).
     Parameter(fn(&Params) -> f64, fn(&mut Params, f64)),
+    /// Continuous state, index into the model's state vector ([`crate::model::ix`]):
+    /// a local variable, set only through fmi2SetContinuousStates (Model Exchange).
+    State(usize),
+    /// Time derivative of the state with this index.
+    Derivative(usize),
 }
 
 /// One row of the table.
@@ -213,7 +218,8 @@ const fn effect_row_count() -> usize {
     n
 }
 
-const ROW_COUNT: usize = TABLE_VARIABLES.len() + effect_row_count() + LIMIT_VARIABLES.len();
+const ROW_COUNT: usize =
+    TABLE_VARIABLES.len() + effect_row_count() + LIMIT_VARIABLES.len() + 2 * STATES.len();
 
 const ALL_VARIABLES: [Variable; ROW_COUNT] = all_variables();
 
@@ -269,8 +275,111 @@ const fn all_variables() -> [Variable; ROW_COUNT] {
         n += 1;
         i += 1;
     }
+    let mut i = 0;
+    while i < STATES.len() {
+        let st = &STATES[i];
+        rows[n] = state_row(
+            STATE_VR + i as u32,
+            st.name,
+            Role::State(i),
+            st.unit,
+            st.description,
+        );
+        rows[n + STATES.len()] = state_row(
+            DERIVATIVE_VR + i as u32,
+            st.derivative,
+            Role::Derivative(i),
+            st.derivative_unit,
+            st.derivative_description,
+        );
+        n += 1;
+        i += 1;
+    }
     rows
 }
+
+const fn state_row(
+    vr: u32,
+    name: &'static str,
+    role: Role,
+    unit: Option<&'static str>,
+    description: &'static str,
+) -> Variable {
+    Variable {
+        vr,
+        name,
+        kind: Kind::Real,
+        role,
+        unit,
+        description,
+        key: None,
+        enumeration: None,
+        feedthrough: &[],
+    }
+}
+
+/// Value reference of the first state; its derivative's is [`DERIVATIVE_VR`] + index.
+const STATE_VR: u32 = 200;
+const DERIVATIVE_VR: u32 = 220;
+
+/// One continuous state of the model as the FMU shows it (Model Exchange integrates
+/// them; Co-Simulation lets them be read).
+struct StateRow {
+    name: &'static str,
+    derivative: &'static str,
+    unit: Option<&'static str>,
+    derivative_unit: Option<&'static str>,
+    description: &'static str,
+    derivative_description: &'static str,
+}
+
+/// The model's state vector, in [`crate::model::ix`] order.
+const STATES: [StateRow; crate::model::NX] = [
+    StateRow { name: "state.spool_position", derivative: "der(state.spool_position)",
+        unit: None, derivative_unit: Some("1/s"),
+        description: "Servovalve spool position (first- and second-order valves)",
+        derivative_description: "Spool speed" },
+    StateRow { name: "state.spool_velocity", derivative: "der(state.spool_velocity)",
+        unit: Some("1/s"), derivative_unit: Some("1/s2"),
+        description: "Servovalve spool speed (second-order valve)",
+        derivative_description: "Spool acceleration" },
+    StateRow { name: "state.pressure_a", derivative: "der(state.pressure_a)",
+        unit: Some("Pa"), derivative_unit: Some("Pa/s"),
+        description: "Chamber A pressure (nonlinear actuator), or the load pressure P_a - P_b (ideal actuator)",
+        derivative_description: "Rate of the first pressure state" },
+    StateRow { name: "state.pressure_b", derivative: "der(state.pressure_b)",
+        unit: Some("Pa"), derivative_unit: Some("Pa/s"),
+        description: "Chamber B pressure (nonlinear actuator; unused by the ideal one)",
+        derivative_description: "Rate of the second pressure state" },
+    StateRow { name: "state.table_displacement", derivative: "der(state.table_displacement)",
+        unit: Some("m"), derivative_unit: Some("m/s"),
+        description: "Absolute table displacement",
+        derivative_description: "Absolute table velocity" },
+    StateRow { name: "state.table_velocity", derivative: "der(state.table_velocity)",
+        unit: Some("m/s"), derivative_unit: Some("m/s2"),
+        description: "Absolute table velocity",
+        derivative_description: "Absolute table acceleration" },
+    StateRow { name: "state.friction_z", derivative: "der(state.friction_z)",
+        unit: None, derivative_unit: Some("1/s"),
+        description: "Bouc-Wen friction variable Z, in [-1, 1]",
+        derivative_description: "Rate of the friction variable" },
+    StateRow { name: "state.specimen_displacement", derivative: "der(state.specimen_displacement)",
+        unit: Some("m"), derivative_unit: Some("m/s"),
+        description: "Absolute specimen displacement (specimen effect)",
+        derivative_description: "Absolute specimen velocity" },
+    StateRow { name: "state.specimen_velocity", derivative: "der(state.specimen_velocity)",
+        unit: Some("m/s"), derivative_unit: Some("m/s2"),
+        description: "Absolute specimen velocity (specimen effect)",
+        derivative_description: "Absolute specimen acceleration" },
+    StateRow { name: "state.foundation_displacement", derivative: "der(state.foundation_displacement)",
+        unit: Some("m"), derivative_unit: Some("m/s"),
+        description: "Reaction-mass displacement (foundation effect)",
+        derivative_description: "Reaction-mass velocity" },
+    StateRow { name: "state.foundation_velocity", derivative: "der(state.foundation_velocity)",
+        unit: Some("m/s"), derivative_unit: Some("m/s2"),
+        description: "Reaction-mass velocity (foundation effect)",
+        derivative_description: "Reaction-mass acceleration" },
+];
 
 /// An input row (continuous; interpolated over a step with fmi2SetRealInputDerivatives).
 macro_rules! input {
@@ -700,6 +809,21 @@ pub const UNITS: &[Unit] = &[
         name: "Hz",
         base: (0, 0, -1),
         display: None,
+    },
+    Unit {
+        name: "1/s",
+        base: (0, 0, -1),
+        display: None,
+    },
+    Unit {
+        name: "1/s2",
+        base: (0, 0, -2),
+        display: None,
+    },
+    Unit {
+        name: "Pa/s",
+        base: (1, -1, -3),
+        display: Some(("bar/s", 1e-5)),
     },
     Unit {
         name: "1/m",

@@ -67,24 +67,21 @@ impl Hydraulics {
         flow_saturation::saturate(self.max_flow, q)
     }
 
-    /// Chamber pressure rates `(P_a', P_b')` or, for the ideal actuator, `(P_L', 0)`.
-    /// `pa`, `pb` are the pressure states (`pa` = P_L for the ideal actuator),
-    /// `x_rel`, `v_rel` the piston stroke and velocity relative to the reaction mass.
+    /// Flows into chamber A and out of chamber B before flow saturation, m^3/s (the ideal
+    /// actuator's one flow twice): the valve's metering, whose saturation edges and
+    /// orifice branches are the actuator's switching surfaces.
     #[inline]
-    pub fn pressure_rates(&self, xv: f64, pa: f64, pb: f64, x_rel: f64, v_rel: f64) -> (f64, f64) {
+    pub fn valve_flows(&self, xv: f64, pa: f64, pb: f64) -> (f64, f64) {
         let opening = self.metering_opening(xv);
-        let a = self.area_m2;
         match self.model {
             ActuatorModel::Ideal => {
-                // (V_t / 4 beta) P_L' = Kq x_v - A v - C_l P_L
-                let q = self.saturate(self.flow_gain * opening);
-                let rate = self.ideal_rate * (q - a * v_rel - self.leakage * pa);
-                (rate, 0.0)
+                let q = self.flow_gain * opening;
+                (q, q)
             }
             ActuatorModel::Nonlinear => {
                 let s = opening.clamp(-1.0, 1.0); // spool clip
                 let kv = self.orifice;
-                let (qa, qb) = if s >= 0.0 {
+                if s >= 0.0 {
                     (
                         kv * s * signed_root(self.supply_pa - pa),
                         kv * s * signed_root(pb),
@@ -94,8 +91,26 @@ impl Hydraulics {
                         kv * s * signed_root(pa),
                         kv * s * signed_root(self.supply_pa - pb),
                     )
-                };
-                let (qa, qb) = (self.saturate(qa), self.saturate(qb));
+                }
+            }
+        }
+    }
+
+    /// Chamber pressure rates `(P_a', P_b')` or, for the ideal actuator, `(P_L', 0)`.
+    /// `pa`, `pb` are the pressure states (`pa` = P_L for the ideal actuator),
+    /// `x_rel`, `v_rel` the piston stroke and velocity relative to the reaction mass.
+    #[inline]
+    pub fn pressure_rates(&self, xv: f64, pa: f64, pb: f64, x_rel: f64, v_rel: f64) -> (f64, f64) {
+        let (qa, qb) = self.valve_flows(xv, pa, pb);
+        let (qa, qb) = (self.saturate(qa), self.saturate(qb));
+        let a = self.area_m2;
+        match self.model {
+            ActuatorModel::Ideal => {
+                // (V_t / 4 beta) P_L' = Kq x_v - A v - C_l P_L
+                let rate = self.ideal_rate * (qa - a * v_rel - self.leakage * pa);
+                (rate, 0.0)
+            }
+            ActuatorModel::Nonlinear => {
                 // chamber volumes, kept positive for strokes past the geometric end
                 let half = 0.5 * self.volume_m3;
                 let floor = 1e-3 * self.volume_m3;

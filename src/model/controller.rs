@@ -26,11 +26,16 @@ pub struct Reference {
 /// `u = clip(Kp(r-x) + Kv(r'-v) + Ka(r''-a) + Fv r' + Fa r'' - Kdp F_A, -1, 1)` (spec section 2).
 #[inline]
 pub fn valve_command(k: &Controller, r: &Reference, y: &Feedback) -> f64 {
-    let u = k.kp * (r.displacement_m - y.displacement_m)
+    command_before_clip(k, r, y).clamp(-1.0, 1.0)
+}
+
+/// The command before its clip to [-1, 1] (the clip's edges are switching surfaces).
+#[inline]
+pub fn command_before_clip(k: &Controller, r: &Reference, y: &Feedback) -> f64 {
+    k.kp * (r.displacement_m - y.displacement_m)
         + k.kv * (r.velocity_m_s - y.velocity_m_s)
         + k.ka * (r.acceleration_m_s2 - y.acceleration_m_s2)
         + k.fv * r.velocity_m_s
         + k.fa * r.acceleration_m_s2
-        - k.kdp * y.force_n;
-    u.clamp(-1.0, 1.0)
+        - k.kdp * y.force_n
 }

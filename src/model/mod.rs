@@ -11,6 +11,7 @@ pub mod friction;
 pub mod limits;
 pub mod payload;
 pub mod servovalve;
+pub mod switching;
 
 pub use controller::{Feedback, Reference};
 
@@ -100,6 +101,8 @@ pub struct Model {
 #[derive(Debug, Clone, Copy, Default)]
 pub struct Algebraic {
     pub valve_command: f64,
+    /// The command before its clip to [-1, 1].
+    pub command_before_clip: f64,
     pub spool_position: f64,
     pub actuator_force_n: f64,
     pub acceleration_m_s2: f64,
@@ -167,13 +170,16 @@ impl Model {
             acceleration_m_s2: a + noise.acceleration_m_s2,
             force_n: f_a + noise.force_n,
         };
-        let u = controller::valve_command(&self.params.controller, &inp.reference, &feedback);
+        let raw =
+            controller::command_before_clip(&self.params.controller, &inp.reference, &feedback);
+        let u = raw.clamp(-1.0, 1.0);
         let xv = match self.valve.model {
             ServovalveModel::Delay => self.valve.gain * delayed_command,
             _ => s[ix::XV],
         };
         Algebraic {
             valve_command: u,
+            command_before_clip: raw,
             spool_position: xv,
             actuator_force_n: f_a,
             acceleration_m_s2: a,
