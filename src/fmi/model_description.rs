@@ -371,12 +371,24 @@ pub fn documentation_html(p: &Params) -> String {
     let mut h = String::from(
         "<!DOCTYPE html><html><head><meta charset=\"utf-8\"><title>ShakeTable FMU</title>\
          <style>body{font-family:sans-serif}td,th{border:1px solid #ccc;padding:2px 6px}\
-         table{border-collapse:collapse}</style></head><body><h1>ShakeTable: FMI 2.0 Co-Simulation FMU</h1>\
-         <p>Servo-hydraulic uni-axial shake table (EUCENTRE TREES Lab). Inputs are interpolated \
-         linearly over a step when fmi2SetRealInputDerivatives gives slopes; the FMU sub-steps \
-         internally (RK4, at most 1/3072 s), so any communication step works. Parameters are \
-         fixed: set them before fmi2ExitInitializationMode.</p><table><tr><th>vr</th><th>name</th>\
-         <th>causality</th><th>type</th><th>unit</th><th>start</th><th>description</th></tr>",
+         table{border-collapse:collapse}</style></head><body><h1>ShakeTable: FMI 2.0 FMU \
+         (Co-Simulation and Model Exchange)</h1>\
+         <p>Servo-hydraulic uni-axial shake table (EUCENTRE TREES Lab). <b>Co-Simulation</b>: \
+         inputs are interpolated linearly over a step when fmi2SetRealInputDerivatives gives \
+         slopes; the FMU sub-steps internally (RK4, at most 1/3072 s), so any communication \
+         step works. <b>Model Exchange</b>: the importer integrates the eleven states \
+         (<code>state.*</code>, derivatives <code>der(state.*)</code>); the delay servovalve \
+         (servovalve.model = delay) is Co-Simulation only and is refused at \
+         fmi2ExitInitializationMode. Parameters are fixed: set them before \
+         fmi2ExitInitializationMode.</p>",
+    );
+    h.push_str("<h2>Event indicators (Model Exchange)</h2><ol start=\"0\">");
+    for s in crate::model::switching::SWITCHES {
+        h.push_str(&format!("<li>{}</li>", escape(s)));
+    }
+    h.push_str(
+        "</ol><h2>Variables</h2><table><tr><th>vr</th><th>name</th><th>causality</th>\
+         <th>type</th><th>unit</th><th>start</th><th>description</th></tr>",
     );
     for v in VARIABLES {
         let causality = match v.role {

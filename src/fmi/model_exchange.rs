@@ -204,3 +204,56 @@ pub fn state_nominals(p: &crate::params::Params) -> [f64; STATE_COUNT] {
     n[ix::VF] = speed;
     n
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::params::{Params, ServovalveModel};
+
+    fn exchange(p: Params) -> Instance {
+        let mut i = Instance::new("me", p);
+        i.interface = Interface::ModelExchange;
+        i.enter_initialization_mode().unwrap();
+        i
+    }
+
+    #[test]
+    fn model_exchange_walks_its_modes_and_starts_at_rest() {
+        let mut i = exchange(Params::trees_lab());
+        i.exit_initialization_mode().unwrap();
+        assert_eq!(i.phase, Phase::EventMode);
+        assert!(
+            i.do_step(0.0, 1e-3).is_err(),
+            "fmi2DoStep is Co-Simulation only"
+        );
+        i.new_discrete_states().unwrap();
+        i.enter_continuous_time_mode().unwrap();
+        let mut ds = [1.0; STATE_COUNT];
+        i.derivatives(&mut ds).unwrap();
+        assert!(ds.iter().all(|d| d.abs() < 1e-6), "at rest: {ds:?}");
+        // a displacement reference opens the valve: the spool starts to move
+        i.inputs[0] = 0.01;
+        i.derivatives(&mut ds).unwrap();
+        assert!(ds[ix::XV_DOT] > 0.0);
+        assert!(i.set_continuous_states(&[0.0; 3]).is_err());
+        assert!(i.set_continuous_states(&[f64::NAN; STATE_COUNT]).is_err());
+        i.completed_integrator_step().unwrap();
+    }
+
+    #[test]
+    fn the_delay_valve_is_refused_and_the_state_leaving_the_envelope_is_an_error() {
+        let mut p = Params::trees_lab();
+        p.servovalve.model = ServovalveModel::Delay;
+        let e = exchange(p).exit_initialization_mode().unwrap_err();
+        assert!(e.message.contains("Model Exchange"), "{e}");
+        let mut i = exchange(Params::trees_lab());
+        i.exit_initialization_mode().unwrap();
+        i.enter_continuous_time_mode().unwrap();
+        let mut x = [0.0; STATE_COUNT];
+        i.continuous_states(&mut x).unwrap();
+        x[ix::X] = 10.0 * Params::trees_lab().limits.stroke_m;
+        i.set_continuous_states(&x).unwrap();
+        assert!(i.completed_integrator_step().is_err());
+        assert_eq!(i.phase, Phase::Error);
+    }
+}
