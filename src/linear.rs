@@ -765,7 +765,7 @@ pub struct OilColumn {
 impl OilColumn {
     pub fn of(p: &Params) -> OilColumn {
         let a = &p.actuator;
-        let k = 4.0 * a.bulk_modulus_pa * a.piston_area_m2.powi(2) / a.total_oil_volume_m3;
+        let k = a.oil_column_stiffness_n_m();
         OilColumn {
             stiffness_n_m: k,
             frequency_hz: (k / p.table.mass_kg).sqrt() / (2.0 * PI),
