@@ -84,7 +84,7 @@ fn a_valid_record_reads() {
     let r = read_record(&p, FS).unwrap();
     assert_eq!(r.len(), 6);
     assert_eq!(r.time_s[1], 1.0 / 512.0);
-    assert_eq!(r.force_n, vec![1234.5; 6]);
+    assert_eq!(r.force_n, Some(vec![1234.5; 6]));
     assert!(r.spool_position.is_some());
     assert!(r.extra.is_empty());
     // a spreadsheet's byte-order mark and CRLF line ends are fine
@@ -584,11 +584,11 @@ fn sample_campaign() -> Campaign {
         ref_displacement_m: awkward_values(n, salt),
         ref_velocity_m_s: awkward_values(n, salt + 0.1),
         ref_acceleration_m_s2: awkward_values(n, salt + 0.2),
-        valve_command: awkward_values(n, salt + 0.3),
+        valve_command: Some(awkward_values(n, salt + 0.3)),
         spool_position: spool.then(|| awkward_values(n, salt + 0.4)),
-        displacement_m: awkward_values(n, salt + 0.5),
-        acceleration_m_s2: awkward_values(n, salt + 0.6),
-        force_n: awkward_values(n, salt + 0.7),
+        displacement_m: Some(awkward_values(n, salt + 0.5)),
+        acceleration_m_s2: Some(awkward_values(n, salt + 0.6)),
+        force_n: Some(awkward_values(n, salt + 0.7)),
         extra: if extra {
             vec![
                 ("velocity_m_s".to_string(), awkward_values(n, salt + 0.8)),
@@ -649,7 +649,10 @@ fn round_trip_is_bit_exact() {
         // bit for bit, including -0.0 and subnormals
         let bits = |v: &[f64]| v.iter().map(|x| x.to_bits()).collect::<Vec<u64>>();
         assert_eq!(bits(&a.ref_displacement_m), bits(&b.ref_displacement_m));
-        assert_eq!(bits(&a.force_n), bits(&b.force_n));
+        assert_eq!(
+            bits(a.force_n.as_deref().unwrap()),
+            bits(b.force_n.as_deref().unwrap())
+        );
         assert_eq!(a, b);
     }
     // writing again gives the same bytes
@@ -668,14 +671,14 @@ fn round_trip_is_bit_exact() {
 fn writing_refuses_what_could_not_be_read() {
     let dir = tempfile::tempdir().unwrap();
     let mut c = sample_campaign();
-    c.records[1].force_n[7] = f64::NAN;
+    c.records[1].force_n.as_mut().unwrap()[7] = f64::NAN;
     let e = write_campaign(&c, dir.path()).unwrap_err();
     assert!(
         e.to_string().contains("R2.csv") && e.to_string().contains("force_n"),
         "{e}"
     );
     let mut c = sample_campaign();
-    c.records[0].valve_command.pop();
+    c.records[0].valve_command.as_mut().unwrap().pop();
     let e = write_record(&c.records[0], &dir.path().join("x.csv")).unwrap_err();
     assert!(e.to_string().contains("valve_command"), "{e}");
     let e = write_record(&Record::default(), &dir.path().join("y.csv")).unwrap_err();

@@ -47,11 +47,11 @@ fn lab_text(r: &Record, control: Control, force_sign: f64) -> String {
             s,
             "{}; 06/29/2022 04:05:36.674 PM; {:e}; {:e}; {:e}; {:e}; {:e}; {:e}",
             k + 1,
-            r.displacement_m[k] * 1000.0,
-            force_sign * r.force_n[k] / 1000.0,
-            r.acceleration_m_s2[k] / G,
+            r.displacement_m.as_deref().unwrap()[k] * 1000.0,
+            force_sign * r.force_n.as_deref().unwrap()[k] / 1000.0,
+            r.acceleration_m_s2.as_deref().unwrap()[k] / G,
             reference,
-            r.valve_command[k],
+            r.valve_command.as_deref().unwrap()[k],
             r.spool_position.as_ref().unwrap()[k],
         );
         s.push_str(if k == 0 { "; DAQ Start\n" } else { "\n" });
@@ -133,6 +133,7 @@ fn a_lab_export_reads_back_as_the_campaign_it_came_from() {
             ("force", &a.force_n, &b.force_n),
             ("acceleration", &a.acceleration_m_s2, &b.acceleration_m_s2),
         ] {
+            let (x, y) = (x.as_deref().unwrap(), y.as_deref().unwrap());
             assert!(rel_rms(x, y) < 1e-12, "{n} {what}: {}", rel_rms(x, y));
         }
         assert_eq!(a.valve_command, b.valve_command, "{n}");
@@ -187,10 +188,10 @@ fn lab_error(toml_extra: &str, edit: impl Fn(String) -> String) -> String {
         &mut r.ref_displacement_m,
         &mut r.ref_velocity_m_s,
         &mut r.ref_acceleration_m_s2,
-        &mut r.valve_command,
-        &mut r.displacement_m,
-        &mut r.acceleration_m_s2,
-        &mut r.force_n,
+        r.valve_command.as_mut().unwrap(),
+        r.displacement_m.as_mut().unwrap(),
+        r.acceleration_m_s2.as_mut().unwrap(),
+        r.force_n.as_mut().unwrap(),
     ] {
         ch.truncate(keep);
     }
@@ -467,11 +468,14 @@ fn a_matlab_recording_reads_back_through_the_mapping() {
     let r = &c.records[0];
     let scaled = |x: &[f64], k: f64| x.iter().map(|v| v * k).collect::<Vec<f64>>();
     let vars = [
-        ("lvdt_mm", scaled(&r.displacement_m, 1000.0)),
-        ("load_kN", scaled(&r.force_n, 1e-3)),
-        ("acc", r.acceleration_m_s2.clone()),
+        (
+            "lvdt_mm",
+            scaled(r.displacement_m.as_deref().unwrap(), 1000.0),
+        ),
+        ("load_kN", scaled(r.force_n.as_deref().unwrap(), 1e-3)),
+        ("acc", r.acceleration_m_s2.clone().unwrap()),
         ("ref_mm", scaled(&r.ref_displacement_m, 1000.0)),
-        ("u", r.valve_command.clone()),
+        ("u", r.valve_command.clone().unwrap()),
     ];
     std::fs::remove_file(dir.join("R1.csv")).unwrap();
     std::fs::write(dir.join("R1.mat"), mat_file(&vars)).unwrap();
@@ -484,8 +488,11 @@ fn a_matlab_recording_reads_back_through_the_mapping() {
     std::fs::write(dir.join("campaign.toml"), &toml).unwrap();
     let got = read_campaign(&dir).unwrap();
     let a = &got.records[0];
-    assert!(rel_rms(&a.displacement_m, &r.displacement_m) < 1e-12);
-    assert!(rel_rms(&a.force_n, &r.force_n) < 1e-12);
+    let both = |x: &Option<Vec<f64>>, y: &Option<Vec<f64>>| {
+        rel_rms(x.as_deref().unwrap(), y.as_deref().unwrap())
+    };
+    assert!(both(&a.displacement_m, &r.displacement_m) < 1e-12);
+    assert!(both(&a.force_n, &r.force_n) < 1e-12);
     assert_eq!(a.valve_command, r.valve_command);
     assert!(rel_rms(&a.ref_velocity_m_s, &r.ref_velocity_m_s) < 1e-5);
     assert!((a.time_s[100] - r.time_s[100]).abs() < 1e-12);

@@ -70,7 +70,8 @@ fn visible(base: &Params, with: &Params) -> bool {
     let a = synthesise(base, &opts, None);
     let b = synthesise(with, &opts, None);
     let n = NoiseLevels::default();
-    let rms = |x: &[f64], y: &[f64]| {
+    let rms = |x: &Option<Vec<f64>>, y: &Option<Vec<f64>>| {
+        let (x, y) = (x.as_deref().unwrap(), y.as_deref().unwrap());
         (x.iter().zip(y).map(|(p, q)| (p - q).powi(2)).sum::<f64>() / x.len() as f64).sqrt()
     };
     a.records.iter().zip(&b.records).any(|(x, y)| {

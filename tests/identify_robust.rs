@@ -42,7 +42,11 @@ fn assert_sane(id: &Identification) {
 #[test]
 fn flipped_force_in_r2_is_screened_not_a_panic() {
     let mut c = small("R2,S3", 5);
-    rec(&mut c, "R2").force_n.iter_mut().for_each(|x| *x = -*x);
+    rec(&mut c, "R2")
+        .force_n
+        .iter_mut()
+        .flatten()
+        .for_each(|x| *x = -*x);
     let id = identify(&c);
     assert!(id.mass_random.is_none());
     assert!(id
@@ -62,17 +66,22 @@ fn flipped_force_in_r2_is_screened_not_a_panic() {
 #[test]
 fn all_zero_or_all_flipped_campaign_gives_no_estimate_and_no_default() {
     for mutate in [
-        (|r: &mut Record| r.force_n.iter_mut().for_each(|x| *x = -*x)) as fn(&mut Record),
-        |r: &mut Record| r.acceleration_m_s2.iter_mut().for_each(|x| *x = -*x),
+        (|r: &mut Record| r.force_n.iter_mut().flatten().for_each(|x| *x = -*x)) as fn(&mut Record),
+        |r: &mut Record| {
+            r.acceleration_m_s2
+                .iter_mut()
+                .flatten()
+                .for_each(|x| *x = -*x)
+        },
         |r: &mut Record| {
             for ch in [
                 &mut r.ref_displacement_m,
                 &mut r.ref_velocity_m_s,
                 &mut r.ref_acceleration_m_s2,
-                &mut r.valve_command,
-                &mut r.displacement_m,
-                &mut r.acceleration_m_s2,
-                &mut r.force_n,
+                r.valve_command.as_mut().unwrap(),
+                r.displacement_m.as_mut().unwrap(),
+                r.acceleration_m_s2.as_mut().unwrap(),
+                r.force_n.as_mut().unwrap(),
             ] {
                 ch.iter_mut().for_each(|x| *x = 0.0);
             }
@@ -103,8 +112,8 @@ fn one_huge_sample_is_repaired_with_a_note() {
         let mut c = c0.clone();
         let r = rec(&mut c, test);
         let x = match ch {
-            "force_n" => &mut r.force_n,
-            "acceleration_m_s2" => &mut r.acceleration_m_s2,
+            "force_n" => r.force_n.as_mut().unwrap(),
+            "acceleration_m_s2" => r.acceleration_m_s2.as_mut().unwrap(),
             "ref_acceleration_m_s2" => &mut r.ref_acceleration_m_s2,
             _ => r.spool_position.as_mut().unwrap(),
         };
@@ -133,7 +142,7 @@ fn one_huge_sample_is_repaired_with_a_note() {
 fn degenerate_r1_gives_no_servovalve_and_diagnose_refuses() {
     let mut c = small("R1,R2", 8);
     let r = rec(&mut c, "R1");
-    r.valve_command.iter_mut().for_each(|x| *x = 0.0);
+    r.valve_command.iter_mut().flatten().for_each(|x| *x = 0.0);
     r.spool_position
         .as_mut()
         .unwrap()
@@ -164,10 +173,10 @@ fn records_too_short_are_refused_by_name() {
                 &mut r.ref_displacement_m,
                 &mut r.ref_velocity_m_s,
                 &mut r.ref_acceleration_m_s2,
-                &mut r.valve_command,
-                &mut r.displacement_m,
-                &mut r.acceleration_m_s2,
-                &mut r.force_n,
+                r.valve_command.as_mut().unwrap(),
+                r.displacement_m.as_mut().unwrap(),
+                r.acceleration_m_s2.as_mut().unwrap(),
+                r.force_n.as_mut().unwrap(),
             ] {
                 ch.truncate(keep);
             }

@@ -40,10 +40,10 @@ fn channel(r: &mut Record, k: usize) -> &mut Vec<f64> {
     match k % 7 {
         0 => &mut r.ref_displacement_m,
         1 => &mut r.ref_acceleration_m_s2,
-        2 => &mut r.valve_command,
-        3 => &mut r.displacement_m,
-        4 => &mut r.acceleration_m_s2,
-        5 => &mut r.force_n,
+        2 => r.valve_command.as_mut().unwrap(),
+        3 => r.displacement_m.as_mut().unwrap(),
+        4 => r.acceleration_m_s2.as_mut().unwrap(),
+        5 => r.force_n.as_mut().unwrap(),
         _ => r.spool_position.as_mut().unwrap(),
     }
 }
@@ -233,8 +233,18 @@ fn cli_exit_codes() {
     let tmp = tempfile::tempdir().unwrap();
     let dir = tmp.path().join("c");
     let mut c = base().clone();
-    c.records[1].force_n.iter_mut().for_each(|x| *x = -*x);
-    c.records[0].valve_command.iter_mut().for_each(|x| *x = 0.0);
+    c.records[1]
+        .force_n
+        .as_mut()
+        .unwrap()
+        .iter_mut()
+        .for_each(|x| *x = -*x);
+    c.records[0]
+        .valve_command
+        .as_mut()
+        .unwrap()
+        .iter_mut()
+        .for_each(|x| *x = 0.0);
     for r in c.records.iter_mut().skip(1) {
         r.spool_position = None;
     }

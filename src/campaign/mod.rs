@@ -133,17 +133,58 @@ pub struct Record {
     pub ref_displacement_m: Vec<f64>,
     pub ref_velocity_m_s: Vec<f64>,
     pub ref_acceleration_m_s2: Vec<f64>,
-    pub valve_command: Vec<f64>,
+    pub valve_command: Option<Vec<f64>>,
     /// Absent in campaigns recorded without the spool LVDT.
     pub spool_position: Option<Vec<f64>>,
-    pub displacement_m: Vec<f64>,
-    pub acceleration_m_s2: Vec<f64>,
-    pub force_n: Vec<f64>,
+    pub displacement_m: Option<Vec<f64>>,
+    pub acceleration_m_s2: Option<Vec<f64>>,
+    pub force_n: Option<Vec<f64>>,
     /// Further channels (`velocity_m_s`, `pressure_a_pa`, ...), kept in file order.
     pub extra: Vec<(String, Vec<f64>)>,
 }
 
+/// A measured channel a laboratory's test may lack (campaign-format.md, "What is required,
+/// what is optional": a test needs the displacement or the acceleration; the valve
+/// command, spool and force are optional).
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Measured {
+    ValveCommand,
+    Spool,
+    Displacement,
+    Acceleration,
+    Force,
+}
+
+impl Measured {
+    /// The channel's name in the campaign format.
+    pub fn name(self) -> &'static str {
+        match self {
+            Measured::ValveCommand => "valve_command",
+            Measured::Spool => format::SPOOL_CHANNEL,
+            Measured::Displacement => "displacement_m",
+            Measured::Acceleration => "acceleration_m_s2",
+            Measured::Force => "force_n",
+        }
+    }
+}
+
 impl Record {
+    /// The measured channel `m`, `None` when the test did not record it.
+    pub fn measured(&self, m: Measured) -> Option<&[f64]> {
+        match m {
+            Measured::ValveCommand => self.valve_command.as_deref(),
+            Measured::Spool => self.spool_position.as_deref(),
+            Measured::Displacement => self.displacement_m.as_deref(),
+            Measured::Acceleration => self.acceleration_m_s2.as_deref(),
+            Measured::Force => self.force_n.as_deref(),
+        }
+    }
+
+    /// Whether the test recorded every channel of `needs`.
+    pub fn has_all(&self, needs: &[Measured]) -> bool {
+        needs.iter().all(|&m| self.measured(m).is_some())
+    }
+
     pub fn len(&self) -> usize {
         self.time_s.len()
     }

@@ -116,11 +116,18 @@ fn channels_mut(r: &mut Record) -> Vec<(&'static str, &mut Vec<f64>)> {
         ("ref_displacement_m", &mut r.ref_displacement_m),
         ("ref_velocity_m_s", &mut r.ref_velocity_m_s),
         ("ref_acceleration_m_s2", &mut r.ref_acceleration_m_s2),
+    ];
+    let optional: [(&'static str, &mut Option<Vec<f64>>); 4] = [
         ("valve_command", &mut r.valve_command),
         ("displacement_m", &mut r.displacement_m),
         ("acceleration_m_s2", &mut r.acceleration_m_s2),
         ("force_n", &mut r.force_n),
     ];
+    for (name, x) in optional {
+        if let Some(x) = x.as_mut() {
+            v.push((name, x));
+        }
+    }
     if let Some(x) = r.spool_position.as_mut() {
         v.push(("spool_position", x));
     }
@@ -311,8 +318,12 @@ fn second_derivative(x: &[f64], fs: f64) -> Vec<f64> {
 /// acceleration with the second derivative of displacement in every test.
 fn check_signs(spec: &TestSpec, r: &Record, fs: f64, out: &mut Vec<Finding>) -> bool {
     let mut ok = true;
-    let d2x = second_derivative(&r.displacement_m, fs);
-    let rho = correlation(&r.acceleration_m_s2, &d2x);
+    let (Some(x), Some(a)) = (r.displacement_m.as_deref(), r.acceleration_m_s2.as_deref()) else {
+        // one response only: nothing to check its sign against
+        return ok;
+    };
+    let d2x = second_derivative(x, fs);
+    let rho = correlation(a, &d2x);
     if rho < -SIGN_CORRELATION_MIN {
         let msg = format!(
             "correlation with the second derivative of displacement_m is {rho:.2}: opposite sign convention"
@@ -320,8 +331,8 @@ fn check_signs(spec: &TestSpec, r: &Record, fs: f64, out: &mut Vec<Finding>) -> 
         out.push(finding("acceleration_m_s2", Action::TestExcluded, msg));
         ok = false;
     }
-    if spec.kind == TestKind::Random {
-        let rho = correlation(&r.force_n, &r.acceleration_m_s2);
+    if let (TestKind::Random, Some(force)) = (spec.kind, r.force_n.as_deref()) {
+        let rho = correlation(force, a);
         if rho < -SIGN_CORRELATION_MIN {
             let msg = format!(
                 "correlation with acceleration_m_s2 is {rho:.2} in a random test (mass times acceleration must be positive): opposite sign convention"

@@ -650,7 +650,7 @@ pub fn synthesise_test(
         ref_velocity_m_s: r.velocity_m_s,
         ref_acceleration_m_s2: r.acceleration_m_s2,
         // the controller's own digital signal: no added noise
-        valve_command: truth.iter().map(|o| o.valve_command).collect(),
+        valve_command: Some(truth.iter().map(|o| o.valve_command).collect()),
         // measured channels: the true reading plus the very noise the controller saw
         spool_position: Some(
             truth
@@ -659,21 +659,27 @@ pub fn synthesise_test(
                 .map(|(o, e)| o.spool_position + e)
                 .collect(),
         ),
-        displacement_m: truth
-            .iter()
-            .zip(&noise)
-            .map(|(o, e)| o.displacement_m + e.displacement_m)
-            .collect(),
-        acceleration_m_s2: truth
-            .iter()
-            .zip(&noise)
-            .map(|(o, e)| o.acceleration_m_s2 + e.acceleration_m_s2)
-            .collect(),
-        force_n: truth
-            .iter()
-            .zip(&noise)
-            .map(|(o, e)| o.actuator_force_n + e.force_n)
-            .collect(),
+        displacement_m: Some(
+            truth
+                .iter()
+                .zip(&noise)
+                .map(|(o, e)| o.displacement_m + e.displacement_m)
+                .collect(),
+        ),
+        acceleration_m_s2: Some(
+            truth
+                .iter()
+                .zip(&noise)
+                .map(|(o, e)| o.acceleration_m_s2 + e.acceleration_m_s2)
+                .collect(),
+        ),
+        force_n: Some(
+            truth
+                .iter()
+                .zip(&noise)
+                .map(|(o, e)| o.actuator_force_n + e.force_n)
+                .collect(),
+        ),
         // Extra channels for users (plots, checks): noise-free truths. Identification
         // and diagnosis do not use them.
         extra: vec![

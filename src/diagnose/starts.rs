@@ -28,7 +28,11 @@ pub(super) fn apparent_mass(c: &Campaign) -> Option<(Vec<f64>, Vec<Complex64>)> 
     )
     .ok()?;
     let e = w
-        .frf_instrumental(&r.ref_acceleration_m_s2, &r.acceleration_m_s2, &r.force_n)
+        .frf_instrumental(
+            &r.ref_acceleration_m_s2,
+            r.acceleration_m_s2.as_deref()?,
+            r.force_n.as_deref()?,
+        )
         .ok()?;
     let idx = e.band(1.0, 40.0);
     Some((
@@ -87,12 +91,10 @@ pub(super) fn starts(
             // the velocity plateau of the fastest sines
             let mut vmax: f64 = 0.0;
             for (spec, r) in c.info.tests.iter().zip(&c.records) {
-                if spec.kind == TestKind::Sine {
+                if let (TestKind::Sine, Some(x)) = (spec.kind, r.displacement_m.as_deref()) {
                     let fs = c.info.sample_rate_hz;
-                    for k in 8..r.len() {
-                        vmax = vmax.max(
-                            ((r.displacement_m[k] - r.displacement_m[k - 8]) * fs / 8.0).abs(),
-                        );
+                    for k in 8..x.len() {
+                        vmax = vmax.max(((x[k] - x[k - 8]) * fs / 8.0).abs());
                     }
                 }
             }
@@ -132,7 +134,12 @@ pub(super) fn foundation_start(c: &Campaign, table_mass_kg: f64) -> Option<Vec<f
         WelchOptions::for_resolution(fs, 0.25).fit_to(r.len(), 4),
     )
     .ok()?;
-    let e = w.frf(&r.displacement_m, &r.acceleration_m_s2).ok()?;
+    let e = w
+        .frf(
+            r.displacement_m.as_deref()?,
+            r.acceleration_m_s2.as_deref()?,
+        )
+        .ok()?;
     let idx: Vec<usize> = e
         .band(3.0, 60.0)
         .into_iter()

@@ -59,11 +59,18 @@ pub fn measured_curve(c: &Campaign, base: &Params, tests: &[usize]) -> Vec<Curve
             continue;
         }
         let r = &c.records[i];
+        let (Some(xs), Some(accel), Some(force)) = (
+            r.displacement_m.as_deref(),
+            r.acceleration_m_s2.as_deref(),
+            r.force_n.as_deref(),
+        ) else {
+            continue; // the friction balance needs the three
+        };
         let range = Part::Fit.range(r.len());
         if range.len() <= 2 * h + 1 {
             continue;
         }
-        let x = &r.displacement_m[range.clone()];
+        let x = &xs[range.clone()];
         let mut turned_at = x[h];
         let mut last_sign = 0.0;
         for k in h..x.len() - h {
@@ -87,9 +94,8 @@ pub fn measured_curve(c: &Campaign, base: &Params, tests: &[usize]) -> Vec<Curve
                 continue;
             };
             let n = range.start + k;
-            let friction = r.force_n[n]
-                - base.table.mass_kg * r.acceleration_m_s2[n]
-                - base.table.stiffness_n_m * r.displacement_m[n];
+            let friction =
+                force[n] - base.table.mass_kg * accel[n] - base.table.stiffness_n_m * xs[n];
             sum[b].0 += v.abs();
             sum[b].1 += friction * sign;
             sum[b].2 += 1;

@@ -8,7 +8,7 @@ use super::signals::{derivative, smooth};
 use super::{
     check_bounds, check_moved, lsq, MIN_SINE_CYCLES, MIN_TRIANGLE_CYCLES, TRIANGLE_FRACTION,
 };
-use crate::campaign::{Campaign, Record, TestSpec};
+use crate::campaign::{Campaign, Measured, Record, TestSpec};
 use nalgebra::{DMatrix, DVector};
 
 /// Mean-removed steady part of a periodic test: samples after the first cycle and
@@ -35,18 +35,30 @@ pub fn fit_triangles(c: &Campaign, mass_kg: f64) -> Result<TriangleFit, Identify
         if spec.kind != crate::campaign::TestKind::Triangle {
             continue;
         }
+        let needs = [
+            Measured::Displacement,
+            Measured::Acceleration,
+            Measured::Force,
+        ];
+        let (Some(x_measured), Some(a_measured), Some(force)) = (
+            rec.measured(needs[0]),
+            rec.measured(needs[1]),
+            rec.measured(needs[2]),
+        ) else {
+            continue; // the force balance needs all three
+        };
         names.push(spec.name.clone());
         let range = steady_range(spec, rec);
         cycles +=
             range.len() as f64 / fs * spec.frequency_hz.filter(|f| f.is_finite()).unwrap_or(0.0);
         let amp = spec.amplitude_m.unwrap_or(1.0);
-        let xs = smooth(&rec.displacement_m, 8);
+        let xs = smooth(x_measured, 8);
         let v = derivative(&xs, fs);
         for i in range {
             let x = rec.ref_displacement_m[i];
             if x.abs() < TRIANGLE_FRACTION * amp && v[i].abs() > 1e-4 {
-                rows.push([rec.displacement_m[i], v[i].signum()]);
-                rhs.push(rec.force_n[i] - mass_kg * rec.acceleration_m_s2[i]);
+                rows.push([x_measured[i], v[i].signum()]);
+                rhs.push(force[i] - mass_kg * a_measured[i]);
             }
         }
     }
@@ -132,6 +144,15 @@ pub(super) fn sine_data(c: &Campaign, names: &[&str]) -> (Vec<SineData>, Vec<Str
         .filter_map(|n| c.test(n))
         .filter(|(s, _)| s.kind == crate::campaign::TestKind::Sine)
         .filter(|(spec, rec)| {
+            let needs = [Measured::Displacement, Measured::Acceleration, Measured::Force];
+            if !rec.has_all(&needs) {
+                short.push(format!(
+                    "{} ({}): the force balance needs displacement_m, acceleration_m_s2 and \
+                     force_n: not used",
+                    spec.name, spec.file
+                ));
+                return false;
+            }
             let r = steady_range(spec, rec);
             let f = spec.frequency_hz.filter(|f| f.is_finite()).unwrap_or(0.0);
             let cycles = r.len() as f64 / fs * f;
@@ -146,14 +167,16 @@ pub(super) fn sine_data(c: &Campaign, names: &[&str]) -> (Vec<SineData>, Vec<Str
         })
         .map(|(spec, rec)| {
             let r = steady_range(spec, rec);
-            let xs = smooth(&rec.displacement_m, 8);
+            // every channel is there: the filter above kept only such tests
+            let get = |m| rec.measured(m).unwrap_or_default();
+            let xs = smooth(get(Measured::Displacement), 8);
             let v = derivative(&xs, fs);
             SineData {
                 name: spec.name.clone(),
                 x: xs[r.clone()].to_vec(),
                 v: v[r.clone()].to_vec(),
-                a: rec.acceleration_m_s2[r.clone()].to_vec(),
-                f: rec.force_n[r].to_vec(),
+                a: get(Measured::Acceleration)[r.clone()].to_vec(),
+                f: get(Measured::Force)[r].to_vec(),
             }
         })
         .collect();

@@ -3,9 +3,9 @@
 use super::error::IdentifyError;
 use super::friction::bouc_wen_path;
 use super::results::{FrfData, FrictionFit, MassFit};
-use super::signals::{smooth, welch_for};
+use super::signals::{channel, smooth, welch_for};
 use super::{check_bounds, check_random_length, lsq, MASS_BAND_HZ, MASS_BOUNDS_KG};
-use crate::campaign::Record;
+use crate::campaign::{Measured, Record};
 use nalgebra::{DMatrix, DVector};
 use std::f64::consts::PI;
 
@@ -26,20 +26,24 @@ pub fn fit_mass_corrected(
     fs: f64,
     friction: Option<(&FrictionFit, f64)>,
 ) -> Result<MassFit, IdentifyError> {
+    const WITHOUT: &str = "mass not identified";
+    let measured_force = channel(name, rec, Measured::Force, WITHOUT)?;
+    let acceleration = channel(name, rec, Measured::Acceleration, WITHOUT)?;
     check_random_length(name, rec, fs, "apparent-mass fit")?;
     let w = welch_for(fs, rec.len()).map_err(|e| IdentifyError::failed(name, e))?;
-    let force: Vec<f64> = match friction {
-        Some((fr, k)) => {
-            let x = smooth(&rec.displacement_m, 8);
+    let force: Vec<f64> = match (friction, rec.displacement_m.as_deref()) {
+        (Some((fr, k)), Some(x_measured)) => {
+            let x = smooth(x_measured, 8);
             let z = bouc_wen_path(&x, fr.yield_displacement_m, fr.shape, 0.0);
             (0..rec.len())
-                .map(|i| rec.force_n[i] - fr.force_n * z[i] - k * rec.displacement_m[i])
+                .map(|i| measured_force[i] - fr.force_n * z[i] - k * x_measured[i])
                 .collect()
         }
-        None => rec.force_n.clone(),
+        // no friction to remove, or no displacement to drive it along
+        _ => measured_force.to_vec(),
     };
     let e = w
-        .frf_instrumental(&rec.ref_acceleration_m_s2, &rec.acceleration_m_s2, &force)
+        .frf_instrumental(&rec.ref_acceleration_m_s2, acceleration, &force)
         .map_err(|e| IdentifyError::failed(name, e))?;
     let idx = e.band(MASS_BAND_HZ[0], MASS_BAND_HZ[1]);
     if idx.len() < 5 {

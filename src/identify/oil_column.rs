@@ -5,12 +5,12 @@ use super::frf::FrfEstimate;
 use super::lsq::{minimise, LsqOptions};
 use super::mass::fit_mass;
 use super::results::{FrfData, OilColumnFit};
-use super::signals::{spool_channel, welch_for};
+use super::signals::{channel, spool_channel, welch_for};
 use super::{
     check_bounds, check_random_length, lsq, DAMPING_BOUNDS, FREQUENCY_BOUNDS_HZ, MASS_BOUNDS_KG,
     OIL_BAND_HZ,
 };
-use crate::campaign::Record;
+use crate::campaign::{Measured, Record};
 use num_complex::Complex64;
 use std::f64::consts::PI;
 
@@ -43,6 +43,10 @@ pub fn fit_oil_column(
         channel: "spool_position",
         consequence: "oil column not identified",
     })?;
+    const WITHOUT: &str = "oil column not identified";
+    let u = channel(name, rec, Measured::ValveCommand, WITHOUT)?;
+    let force = channel(name, rec, Measured::Force, WITHOUT)?;
+    let acceleration = channel(name, rec, Measured::Acceleration, WITHOUT)?;
     check_random_length(name, rec, fs, "oil-column fit")?;
     check_bounds(
         name,
@@ -52,7 +56,7 @@ pub fn fit_oil_column(
     )?;
     let w = welch_for(fs, rec.len()).map_err(|e| IdentifyError::failed(name, e))?;
     let iv = w
-        .frf_instrumental(&rec.valve_command, x, &rec.force_n)
+        .frf_instrumental(u, x, force)
         .map_err(|e| IdentifyError::failed(name, e))?;
     let area = geometry.piston_area_m2;
     let kq_a = geometry.flow_gain_m3_s * area;
@@ -60,11 +64,7 @@ pub fn fit_oil_column(
     // mass of R3 less its fitted mass (friction is amplitude dependent, so R2's would not do)
     let own = fit_mass(name, rec, fs)?;
     let apparent = w
-        .frf_instrumental(
-            &rec.ref_acceleration_m_s2,
-            &rec.acceleration_m_s2,
-            &rec.force_n,
-        )
+        .frf_instrumental(&rec.ref_acceleration_m_s2, acceleration, force)
         .map_err(|e| IdentifyError::failed(name, e))?;
     let fit_on = |h: &[Complex64], e: &FrfEstimate| -> Option<(lsq::LsqFit, Vec<usize>)> {
         let idx = e.band(OIL_BAND_HZ[0], OIL_BAND_HZ[1]);
@@ -103,7 +103,7 @@ pub fn fit_oil_column(
     })?;
     // H1 from the noisy spool, for the report's comparison
     let plain = w
-        .frf(x, &rec.force_n)
+        .frf(x, force)
         .map_err(|e| IdentifyError::failed(name, e))?;
     let h1fit = fit_on(&plain.h1, &plain).map(|(f, _)| f);
     let figures = |k_oil: f64, leak: f64| {

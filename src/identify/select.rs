@@ -16,13 +16,24 @@
 //! - **loop mass** (4.2.2): the other sines, where inertia dominates (S3, S6, S9).
 //! - **stiffness and sliding friction** (4.2.1): every triangle test.
 
-use crate::campaign::{Campaign, Control, TestKind, TestSpec};
+use crate::campaign::{Campaign, Control, Measured, TestKind, TestSpec};
 use std::f64::consts::PI;
 
 /// A sine is slow (friction shows, inertia does not) when its inertia force amplitude is
 /// at most this many times the friction force: the paper's slow sines reach 0.8, its fast
 /// ones 5 and more; 2 sits between with margin on both sides.
 pub const SLOW_SINE_INERTIA_RATIO: f64 = 2.0;
+
+/// The channels each random-test estimator needs (a test without them cannot take the
+/// role): the valve's FRF command -> spool; the apparent mass force over acceleration; the
+/// oil column command -> force (with the spool as instrument) and the apparent mass.
+pub const VALVE_NEEDS: &[Measured] = &[Measured::ValveCommand, Measured::Spool];
+pub const MASS_NEEDS: &[Measured] = &[Measured::Acceleration, Measured::Force];
+pub const OIL_COLUMN_NEEDS: &[Measured] = &[
+    Measured::ValveCommand,
+    Measured::Acceleration,
+    Measured::Force,
+];
 
 /// The random tests' roles (indices into the campaign).
 #[derive(Debug, Clone, Copy, Default, PartialEq, Eq)]
@@ -67,7 +78,14 @@ pub fn random_roles(c: &Campaign) -> RandomRoles {
         .collect();
     let has_spool = |i: usize| c.records[i].spool_position.is_some();
     let control = |i: usize| c.info.tests[i].control;
-    let with_spool: Vec<usize> = random.iter().copied().filter(|&i| has_spool(i)).collect();
+    let recording = |needs: &'static [Measured]| -> Vec<usize> {
+        random
+            .iter()
+            .copied()
+            .filter(|&i| c.records[i].has_all(needs))
+            .collect()
+    };
+    let with_spool = recording(VALVE_NEEDS);
     let valve = best_by(&with_spool, |i| {
         (
             control(i) == Control::Displacement,
@@ -75,11 +93,14 @@ pub fn random_roles(c: &Campaign) -> RandomRoles {
             band_top_hz(&c.info.tests[i]),
         )
     });
-    let mass = best_by(&random, |i| {
-        let strength = rms(&c.records[i].acceleration_m_s2);
+    let mass = best_by(&recording(MASS_NEEDS), |i| {
+        let strength = rms(c.records[i]
+            .acceleration_m_s2
+            .as_deref()
+            .unwrap_or_default());
         (control(i) == Control::Acceleration, true, strength)
     });
-    let oil_column = best_by(&random, |i| {
+    let oil_column = best_by(&recording(OIL_COLUMN_NEEDS), |i| {
         let band = band_top_hz(&c.info.tests[i]);
         (
             Some(i) != mass && has_spool(i),

@@ -3,12 +3,12 @@
 use super::error::IdentifyError;
 use super::lsq::{minimise, LsqOptions};
 use super::results::{FrfData, ServovalveFit};
-use super::signals::{spool_channel, welch_for};
+use super::signals::{channel, spool_channel, welch_for};
 use super::{
     check_bounds, check_moved, check_random_length, DAMPING_BOUNDS, FREQUENCY_BOUNDS_HZ,
     VALVE_BAND_HZ,
 };
-use crate::campaign::Record;
+use crate::campaign::{Measured, Record};
 use crate::params::ServovalveModel;
 use num_complex::Complex64;
 use std::f64::consts::PI;
@@ -32,11 +32,15 @@ pub fn fit_servovalve(name: &str, rec: &Record, fs: f64) -> Result<ServovalveFit
         channel: "spool_position",
         consequence: "servovalve not identified",
     })?;
+    let u = channel(
+        name,
+        rec,
+        Measured::ValveCommand,
+        "servovalve not identified",
+    )?;
     check_random_length(name, rec, fs, "servovalve fit")?;
     let w = welch_for(fs, rec.len()).map_err(|e| IdentifyError::failed(name, e))?;
-    let e = w
-        .frf(&rec.valve_command, x)
-        .map_err(|e| IdentifyError::failed(name, e))?;
+    let e = w.frf(u, x).map_err(|e| IdentifyError::failed(name, e))?;
     let idx = e.band(VALVE_BAND_HZ[0], VALVE_BAND_HZ[1]);
     if idx.len() < 10 {
         return Err(IdentifyError::failed(

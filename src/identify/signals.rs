@@ -1,12 +1,29 @@
 //! Channel access and signal helpers the estimators share.
 
+use super::error::IdentifyError;
 use super::frf::{Welch, WelchOptions};
 use super::{frf, RESOLUTION_HZ};
-use crate::campaign::Record;
+use crate::campaign::{Measured, Record};
 
 /// The spool channel of a record, if recorded.
 pub(super) fn spool_channel(r: &Record) -> Option<&[f64]> {
     r.spool_position.as_deref()
+}
+
+/// Channel `m` of test `name`, or the error naming the test, the channel and what cannot
+/// be identified without it.
+pub(super) fn channel<'a>(
+    name: &str,
+    rec: &'a Record,
+    m: Measured,
+    consequence: &'static str,
+) -> Result<&'a [f64], IdentifyError> {
+    rec.measured(m)
+        .ok_or_else(|| IdentifyError::MissingChannel {
+            test: name.to_string(),
+            channel: m.name(),
+            consequence,
+        })
 }
 
 pub(super) fn welch_for(fs: f64, n: usize) -> Result<Welch, frf::FrfError> {

@@ -112,8 +112,9 @@ pub fn refine_servovalve(
         .iter()
         .filter_map(|r| {
             let x = r.spool_position.as_deref()?;
+            let u = r.valve_command.as_deref()?;
             let rg = range(r.len());
-            (!rg.is_empty()).then_some((&r.valve_command[..rg.end], &x[..rg.end], rg))
+            (!rg.is_empty()).then_some((&u[..rg.end], &x[..rg.end], rg))
         })
         .collect();
     if data.is_empty() {

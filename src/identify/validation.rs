@@ -15,8 +15,11 @@ use num_complex::Complex64;
 
 /// Measured table TF of a random test: reference acceleration -> table acceleration.
 pub(super) fn table_tf_of(rec: &Record, fs: f64) -> Result<FrfEstimate, IdentifyError> {
+    let a = rec.acceleration_m_s2.as_deref().ok_or_else(|| {
+        IdentifyError::not_usable("no acceleration_m_s2 channel: no measured table TF")
+    })?;
     let w = welch_for(fs, rec.len()).map_err(IdentifyError::not_usable)?;
-    w.frf(&rec.ref_acceleration_m_s2, &rec.acceleration_m_s2)
+    w.frf(&rec.ref_acceleration_m_s2, a)
         .map_err(IdentifyError::not_usable)
 }
 

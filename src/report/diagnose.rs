@@ -117,8 +117,8 @@ pub fn write(dir: &Path, c: &Campaign, d: &Diagnosis) -> Result<(), super::Repor
                 .iter()
                 .map(|o| o.acceleration_m_s2)
                 .collect();
-            if let (Some(m), Some(b), Some(e)) = (est(&r.acceleration_m_s2), est(&base), est(&ext))
-            {
+            let measured = r.acceleration_m_s2.as_deref().and_then(est);
+            if let (Some(m), Some(b), Some(e)) = (measured, est(&base), est(&ext)) {
                 let ext_label = format!("extended ({cause})");
                 bode_png(
                     &dir.join("table_tf.png"),

@@ -208,6 +208,11 @@ fn rms(x: &[f64]) -> f64 {
     (x.iter().map(|v| v * v).sum::<f64>() / x.len().max(1) as f64).sqrt()
 }
 
+/// The RMS of a channel for the table, `absent` when the test did not record it.
+fn rms_cell(x: Option<&[f64]>) -> String {
+    x.map_or("absent".into(), |x| format!("{:.4e}", rms(x)))
+}
+
 fn run_check(a: CheckArgs) -> anyhow::Result<()> {
     let c = read_campaign(&a.dir).with_context(|| format!("campaign {}", a.dir.display()))?;
     println!(
@@ -225,14 +230,14 @@ fn run_check(a: CheckArgs) -> anyhow::Result<()> {
         let len = r.len() as f64 / c.info.sample_rate_hz;
         total += len;
         println!(
-            "{:<6} {:<9} {:<13} {:>9.2} {:>12.4e} {:>12.4e} {:>12.4e} {:>6}  {}",
+            "{:<6} {:<9} {:<13} {:>9.2} {:>12.4e} {:>12} {:>12} {:>6}  {}",
             t.name,
             format!("{:?}", t.kind).to_lowercase(),
             format!("{:?}", t.control).to_lowercase(),
             len,
             rms(&r.ref_displacement_m),
-            rms(&r.displacement_m),
-            rms(&r.acceleration_m_s2),
+            rms_cell(r.displacement_m.as_deref()),
+            rms_cell(r.acceleration_m_s2.as_deref()),
             if r.spool_position.is_some() {
                 "yes"
             } else {

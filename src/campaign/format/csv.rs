@@ -443,11 +443,11 @@ pub(super) fn record_from_table(mut t: CsvTable) -> Record {
         ref_displacement_m,
         ref_velocity_m_s,
         ref_acceleration_m_s2,
-        valve_command,
+        valve_command: Some(valve_command),
         spool_position,
-        displacement_m,
-        acceleration_m_s2,
-        force_n,
+        displacement_m: Some(displacement_m),
+        acceleration_m_s2: Some(acceleration_m_s2),
+        force_n: Some(force_n),
         extra,
     }
 }

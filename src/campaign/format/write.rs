@@ -1,22 +1,29 @@
 //! Writing records and campaign.toml (floats shortest round-trip).
 
 use super::*;
+use crate::campaign::Measured;
 
-/// The channels of a record in file order: required ones, the spool (if any), extras.
+/// The channels of a record in file order: time and reference, the measured channels it
+/// has, extras.
 pub(super) fn channels(record: &Record) -> Vec<(&str, &[f64])> {
     let mut c: Vec<(&str, &[f64])> = vec![
         ("time_s", &record.time_s),
         ("ref_displacement_m", &record.ref_displacement_m),
         ("ref_velocity_m_s", &record.ref_velocity_m_s),
         ("ref_acceleration_m_s2", &record.ref_acceleration_m_s2),
-        ("valve_command", &record.valve_command),
     ];
-    if let Some(s) = &record.spool_position {
-        c.push((SPOOL_CHANNEL, s));
+    // the measured channels the test recorded, in the format's order
+    for m in [
+        Measured::ValveCommand,
+        Measured::Spool,
+        Measured::Displacement,
+        Measured::Acceleration,
+        Measured::Force,
+    ] {
+        if let Some(x) = record.measured(m) {
+            c.push((m.name(), x));
+        }
     }
-    c.push(("displacement_m", &record.displacement_m));
-    c.push(("acceleration_m_s2", &record.acceleration_m_s2));
-    c.push(("force_n", &record.force_n));
     for (n, v) in &record.extra {
         c.push((n.as_str(), v));
     }

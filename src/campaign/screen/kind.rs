@@ -170,14 +170,17 @@ fn reversals(v: &[f64], threshold: f64) -> usize {
 /// The net work of the force on the measured motion against its gross work
 /// ([`NET_WORK_SIGN_MIN`]).
 fn check_force_work(r: &Record, f: f64, fs: f64, out: &mut Vec<Finding>) -> bool {
-    let v = speed(&r.displacement_m, f, fs);
-    let n = r.force_n.len().min(v.len());
+    let (Some(x), Some(force_n)) = (r.displacement_m.as_deref(), r.force_n.as_deref()) else {
+        return true; // no force or no displacement: no work to check
+    };
+    let v = speed(x, f, fs);
+    let n = force_n.len().min(v.len());
     if n == 0 {
         return true;
     }
-    let mean = r.force_n[..n].iter().sum::<f64>() / n as f64;
+    let mean = force_n[..n].iter().sum::<f64>() / n as f64;
     let (mut net, mut gross) = (0.0, 0.0);
-    for (force, speed) in r.force_n[..n].iter().zip(&v) {
+    for (force, speed) in force_n[..n].iter().zip(&v) {
         let p = (force - mean) * speed;
         net += p;
         gross += p.abs();
@@ -221,8 +224,8 @@ mod tests {
             .collect();
         Record {
             ref_displacement_m: x.clone(),
-            displacement_m: x,
-            force_n,
+            displacement_m: Some(x),
+            force_n: Some(force_n),
             ..Record::default()
         }
     }

@@ -16,11 +16,11 @@ pub const CHANNELS: [&str; 5] = [
 /// Channel `ch` of [`CHANNELS`] in a record (None when the record lacks it).
 pub fn measured(r: &Record, ch: usize) -> Option<&[f64]> {
     match ch {
-        0 => Some(&r.displacement_m),
-        1 => Some(&r.acceleration_m_s2),
-        2 => Some(&r.force_n),
+        0 => r.displacement_m.as_deref(),
+        1 => r.acceleration_m_s2.as_deref(),
+        2 => r.force_n.as_deref(),
         3 => r.spool_position.as_deref(),
-        _ => Some(&r.valve_command),
+        _ => r.valve_command.as_deref(),
     }
 }
 
