@@ -319,14 +319,14 @@ fn a_valid_campaign_reads_with_unknown_keys_ignored() {
     let c = read_campaign(dir.path()).unwrap();
     assert_eq!(c.info.name, "TREES Lab bare table, 2009 characterisation");
     assert_eq!(c.info.sample_rate_hz, 512.0);
-    assert_eq!(c.info.geometry.supply_pressure_pa, 28.0e6);
-    assert_eq!(c.info.controller.kdp, 3.293e-8);
+    assert_eq!(c.info.geometry.supply_pressure_pa, Some(28.0e6));
+    assert_eq!(c.info.controller.kdp, Some(3.293e-8));
     assert_eq!(c.info.tests.len(), 2);
     let (r1, rec) = c.test("R1").unwrap();
     assert_eq!(r1.kind, TestKind::Random);
     assert_eq!(r1.band_hz, Some([0.0, 125.0]));
-    assert_eq!(c.controller_for(r1).fv, 0.0);
-    assert_eq!(c.controller_for(r1).kp, 10.0);
+    assert_eq!(c.controller_for(r1).unwrap().fv, 0.0);
+    assert_eq!(c.controller_for(r1).unwrap().kp, 10.0);
     assert_eq!(rec.len(), 6);
     let (s3, _) = c.test("S3").unwrap();
     assert_eq!((s3.frequency_hz, s3.amplitude_m), (Some(0.5), Some(0.05)));
@@ -360,21 +360,49 @@ fn missing_required_keys_name_file_key_and_test() {
     // top level: no line to point at, but file and key
     let t = TOML.replacen("sample_rate_hz = 512.0\n", "", 1);
     toml_fails(&t, None, &["key `sample_rate_hz`", "missing"]);
-    // geometry and controller keys: the line of their table header
+}
+
+/// campaign-format.md: every `[geometry]` and `[controller]` key is optional; one not
+/// given is unknown (not a default), and simulating a test needs its gains.
+#[test]
+fn missing_geometry_and_gains_are_unknown_not_defaults() {
     let t = TOML.replacen("flow_gain_m3_s = 0.2\n", "", 1);
-    toml_fails(
-        &t,
-        Some(line_of(&t, "[geometry]", 1)),
-        &["key `geometry.flow_gain_m3_s`", "missing"],
+    let c = read_campaign(campaign_dir(&t).path()).unwrap();
+    assert_eq!(c.info.geometry.flow_gain_m3_s, None);
+    assert_eq!(c.info.geometry.piston_area_m2, Some(0.0911));
+    let mut p = Params::trees_lab();
+    p.actuator.flow_gain_m3_s = 1.5;
+    assert_eq!(
+        c.info.geometry.apply_to(&mut p),
+        vec!["actuator.flow_gain_m3_s"]
+    );
+    assert_eq!(
+        p.actuator.flow_gain_m3_s, 1.5,
+        "an unknown key leaves the value alone"
     );
     let t = TOML.replacen("kdp = 3.293e-8\n", "", 1);
-    toml_fails(
-        &t,
-        Some(line_of(&t, "[controller]", 1)),
-        &["key `controller.kdp`", "missing"],
+    let c = read_campaign(campaign_dir(&t).path()).unwrap();
+    let (r1, _) = c.test("R1").unwrap();
+    let e = c.controller_for(r1).unwrap_err();
+    assert_eq!(e.gains, vec!["kdp"]);
+    assert!(
+        e.to_string().contains("kdp") && e.to_string().contains("R1"),
+        "{e}"
     );
+    assert!(c.gains_known().is_err());
+    // a test's own override completes the gains for that test
+    let t2 = t.replacen(
+        "controller = { fv = 0.0 }",
+        "controller = { fv = 0.0, kdp = 1e-8 }",
+        1,
+    );
+    let c = read_campaign(campaign_dir(&t2).path()).unwrap();
+    assert_eq!(c.controller_for(c.test("R1").unwrap().0).unwrap().kdp, 1e-8);
+    assert!(c.controller_for(c.test("S3").unwrap().0).is_err());
+    // no [geometry] at all
     let t = TOML.replacen("[geometry]", "[geometry_old]", 1);
-    toml_fails(&t, None, &["key `geometry`", "missing"]);
+    let c = read_campaign(campaign_dir(&t).path()).unwrap();
+    assert_eq!(c.info.geometry, Geometry::default());
 }
 
 #[test]
@@ -626,7 +654,7 @@ fn sample_campaign() -> Campaign {
             name: "round \"trip\" \\ test".to_string(),
             sample_rate_hz: FS,
             geometry: Geometry::from_params(&p),
-            controller: p.controller,
+            controller: ControllerOverride::known(&p.controller),
             tests: vec![r1, r2, t1],
         },
         records: vec![

@@ -16,31 +16,64 @@ use crate::params::{Controller, Params};
 use serde::{Deserialize, Serialize};
 use std::path::PathBuf;
 
-/// Manufacturer geometry known to the lab (`[geometry]` of campaign.toml).
-#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+/// Manufacturer geometry known to the lab (`[geometry]` of campaign.toml): each key is
+/// `None` when nobody wrote it down (campaign-format.md: a missing key is *unknown*).
+#[derive(Debug, Clone, Copy, Default, PartialEq, Serialize, Deserialize)]
 pub struct Geometry {
-    pub piston_area_m2: f64,
-    pub total_oil_volume_m3: f64,
-    pub supply_pressure_pa: f64,
-    pub flow_gain_m3_s: f64,
+    pub piston_area_m2: Option<f64>,
+    pub total_oil_volume_m3: Option<f64>,
+    pub supply_pressure_pa: Option<f64>,
+    pub flow_gain_m3_s: Option<f64>,
 }
 
 impl Geometry {
+    /// Every key known, from a parameter set.
     pub fn from_params(p: &Params) -> Geometry {
         Geometry {
-            piston_area_m2: p.actuator.piston_area_m2,
-            total_oil_volume_m3: p.actuator.total_oil_volume_m3,
-            supply_pressure_pa: p.actuator.supply_pressure_pa,
-            flow_gain_m3_s: p.actuator.flow_gain_m3_s,
+            piston_area_m2: Some(p.actuator.piston_area_m2),
+            total_oil_volume_m3: Some(p.actuator.total_oil_volume_m3),
+            supply_pressure_pa: Some(p.actuator.supply_pressure_pa),
+            flow_gain_m3_s: Some(p.actuator.flow_gain_m3_s),
         }
     }
-    /// Put this geometry into `p`'s actuator block (the inverse of [`Self::from_params`]).
-    pub fn apply_to(&self, p: &mut Params) {
-        p.actuator.piston_area_m2 = self.piston_area_m2;
-        p.actuator.total_oil_volume_m3 = self.total_oil_volume_m3;
-        p.actuator.supply_pressure_pa = self.supply_pressure_pa;
-        p.actuator.flow_gain_m3_s = self.flow_gain_m3_s;
+
+    /// Each key with its parameter-file key and value.
+    fn entries(&self) -> [(&'static str, Option<f64>); 4] {
+        [
+            ("actuator.piston_area_m2", self.piston_area_m2),
+            ("actuator.total_oil_volume_m3", self.total_oil_volume_m3),
+            ("actuator.supply_pressure_pa", self.supply_pressure_pa),
+            ("actuator.flow_gain_m3_s", self.flow_gain_m3_s),
+        ]
     }
+
+    /// Put the known keys into `p`'s actuator block (the inverse of
+    /// [`Self::from_params`]); returns the parameter-file keys left as they were.
+    pub fn apply_to(&self, p: &mut Params) -> Vec<&'static str> {
+        let a = &mut p.actuator;
+        let targets = [
+            &mut a.piston_area_m2,
+            &mut a.total_oil_volume_m3,
+            &mut a.supply_pressure_pa,
+            &mut a.flow_gain_m3_s,
+        ];
+        let mut unknown = Vec::new();
+        for ((key, value), target) in self.entries().into_iter().zip(targets) {
+            match value {
+                Some(v) => *target = v,
+                None => unknown.push(key),
+            }
+        }
+        unknown
+    }
+}
+
+/// Controller gains a campaign does not give (campaign-format.md: unknown keys).
+#[derive(Debug, Clone, PartialEq, thiserror::Error)]
+#[error("controller gain{} {} of test `{test}` unknown: give {} in campaign.toml's [controller] (or the test's `controller = {{ ... }}`) to simulate it", if .gains.len() > 1 { "s" } else { "" }, .gains.join(", "), if .gains.len() > 1 { "them" } else { "it" })]
+pub struct UnknownGains {
+    pub test: String,
+    pub gains: Vec<&'static str>,
 }
 
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
@@ -49,6 +82,9 @@ pub enum TestKind {
     Random,
     Sine,
     Triangle,
+    /// Any other reference (earthquake, chirp, recorded drive): campaign-format.md's
+    /// `record` kind; it needs neither a level nor a frequency.
+    Record,
 }
 
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
@@ -58,7 +94,8 @@ pub enum Control {
     Acceleration,
 }
 
-/// Per-test override of any controller gain (`controller = { fv = 0.0 }`).
+/// Controller gains, each given or not: the campaign's `[controller]` (a gain nobody
+/// wrote down is unknown) and a test's override (`controller = { fv = 0.0 }`).
 #[derive(Debug, Clone, Copy, Default, PartialEq, Serialize, Deserialize)]
 pub struct ControllerOverride {
     #[serde(skip_serializing_if = "Option::is_none")]
@@ -76,6 +113,59 @@ pub struct ControllerOverride {
 }
 
 impl ControllerOverride {
+    /// Every gain known, from a parameter set.
+    pub fn known(c: &Controller) -> ControllerOverride {
+        ControllerOverride {
+            kp: Some(c.kp),
+            kv: Some(c.kv),
+            ka: Some(c.ka),
+            fv: Some(c.fv),
+            fa: Some(c.fa),
+            kdp: Some(c.kdp),
+        }
+    }
+
+    /// These gains over `base` (each given here wins).
+    pub fn over(&self, base: &ControllerOverride) -> ControllerOverride {
+        ControllerOverride {
+            kp: self.kp.or(base.kp),
+            kv: self.kv.or(base.kv),
+            ka: self.ka.or(base.ka),
+            fv: self.fv.or(base.fv),
+            fa: self.fa.or(base.fa),
+            kdp: self.kdp.or(base.kdp),
+        }
+    }
+
+    /// The gains, if every one is known; else the names of those that are not.
+    pub fn complete(&self) -> Result<Controller, Vec<&'static str>> {
+        let named = [
+            ("kp", self.kp),
+            ("kv", self.kv),
+            ("ka", self.ka),
+            ("fv", self.fv),
+            ("fa", self.fa),
+            ("kdp", self.kdp),
+        ];
+        let unknown: Vec<&'static str> = named
+            .iter()
+            .filter(|(_, v)| v.is_none())
+            .map(|(k, _)| *k)
+            .collect();
+        if !unknown.is_empty() {
+            return Err(unknown);
+        }
+        let g = |x: Option<f64>| x.unwrap_or_default();
+        Ok(Controller {
+            kp: g(self.kp),
+            kv: g(self.kv),
+            ka: g(self.ka),
+            fv: g(self.fv),
+            fa: g(self.fa),
+            kdp: g(self.kdp),
+        })
+    }
+
     /// The campaign gains with this test's overrides applied.
     pub fn apply(&self, base: &Controller) -> Controller {
         Controller {
@@ -122,7 +212,8 @@ pub struct CampaignInfo {
     pub name: String,
     pub sample_rate_hz: f64,
     pub geometry: Geometry,
-    pub controller: Controller,
+    /// The gains campaign.toml gives (each may be unknown).
+    pub controller: ControllerOverride,
     pub tests: Vec<TestSpec>,
 }
 
@@ -227,8 +318,22 @@ impl Campaign {
             .map(|i| (&self.info.tests[i], &self.records[i]))
     }
 
-    /// The controller gains in force during test `spec`.
-    pub fn controller_for(&self, spec: &TestSpec) -> Controller {
-        spec.controller.apply(&self.info.controller)
+    /// The controller gains in force during test `spec`, or the gains nobody gave.
+    pub fn controller_for(&self, spec: &TestSpec) -> Result<Controller, UnknownGains> {
+        spec.controller
+            .over(&self.info.controller)
+            .complete()
+            .map_err(|gains| UnknownGains {
+                test: spec.name.clone(),
+                gains,
+            })
+    }
+
+    /// Every test's gains are known (what simulating the campaign needs).
+    pub fn gains_known(&self) -> Result<(), UnknownGains> {
+        self.info
+            .tests
+            .iter()
+            .try_for_each(|t| self.controller_for(t).map(|_| ()))
     }
 }

@@ -286,6 +286,8 @@ pub fn test_duration_s(spec: &TestSpec, random_duration_s: f64) -> f64 {
             TestKind::Random => random_duration_s,
             TestKind::Sine => (sine_cycles(f) + 1) as f64 / f,
             TestKind::Triangle => TRIANGLE_CYCLES as f64 / f,
+            // never synthesised (check_spec refuses it): no length of its own
+            TestKind::Record => 0.0,
         }
 }
 
@@ -342,6 +344,12 @@ fn check_spec(spec: &TestSpec, random_duration_s: f64, fs: f64) -> Result<(), Sy
         })
     };
     match spec.kind {
+        TestKind::Record => {
+            return bad(
+                "a `record` test replays a recorded reference; the synthetic program \
+                        generates random, sine and triangle references only",
+            )
+        }
         TestKind::Random => {
             let (Some(rms), Some([lo, hi])) = (spec.rms, spec.band_hz) else {
                 return bad("a random test needs rms and band_hz");
@@ -588,6 +596,10 @@ pub fn reference(
         ),
         TestKind::Sine => sine_reference(spec, sample_rate_hz),
         TestKind::Triangle => triangle_reference(spec, sample_rate_hz),
+        TestKind::Record => Err(SynthError::BadTest {
+            name: spec.name.clone(),
+            message: "a `record` test has no synthetic reference".into(),
+        }),
     }
 }
 
@@ -753,7 +765,7 @@ pub fn synthesise_program(
             ),
             sample_rate_hz: fs,
             geometry: Geometry::from_params(params),
-            controller: params.controller,
+            controller: ControllerOverride::known(&params.controller),
             tests: program.iter().map(|(_, s)| s.clone()).collect(),
         },
         records,

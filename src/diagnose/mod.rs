@@ -111,6 +111,8 @@ fn unphysical(b: &Candidate, table_mass_kg: f64) -> Option<String> {
 /// Diagnose a campaign (see the module doc) after screening its records; refused (with
 /// the reason) when the baseline identification is incomplete.
 pub fn diagnose(c: &Campaign, progress: Option<Progress>) -> Result<Diagnosis, String> {
+    // every comparison simulates the tests with their gains
+    c.gains_known().map_err(|e| e.to_string())?;
     let screened = screen(c);
     let id = identify_screened(&screened);
     if let Some(why) = baseline_gaps(&id) {

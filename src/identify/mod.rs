@@ -29,7 +29,7 @@ pub use error::IdentifyError;
 pub use estimates::Estimate;
 pub use friction::{bouc_wen_path, fit_friction, fit_triangles};
 pub use mass::{fit_mass, fit_mass_corrected};
-pub use oil_column::fit_oil_column;
+pub use oil_column::{fit_oil_column, OilGeometry};
 pub use periodic::fit_mass_periodic;
 pub use results::*;
 pub use servovalve::{fit_servovalve, relative_error};
@@ -165,11 +165,11 @@ pub fn identify_screened(s: &Screening) -> Identification {
     // start from the defaults with the lab's geometry and controller; `defaults` lists
     // what stays a default and why
     let mut p = Params::trees_lab();
-    p.actuator.piston_area_m2 = g.piston_area_m2;
-    p.actuator.total_oil_volume_m3 = g.total_oil_volume_m3;
-    p.actuator.supply_pressure_pa = g.supply_pressure_pa;
-    p.actuator.flow_gain_m3_s = g.flow_gain_m3_s;
-    p.controller = c.info.controller;
+    let mut unknown_inputs = g.apply_to(&mut p);
+    match c.info.controller.complete() {
+        Ok(k) => p.controller = k,
+        Err(gains) => unknown_inputs.extend(gains.iter().map(|k| controller_key(k))),
+    }
 
     let roles = select::random_roles(c);
     let name = |i: usize| c.info.tests[i].name.as_str();
@@ -242,7 +242,13 @@ pub fn identify_screened(s: &Screening) -> Identification {
         p.friction.shape = fr.shape.min(0.999);
     }
     let oil = match (roles.oil_column, mass_kg) {
-        (Some(i), Some(m)) => in_file(c, name(i), fit_oil_column(name(i), &c.records[i], fs, g, m)),
+        (Some(i), Some(m)) => OilGeometry::from_campaign(g).and_then(|og| {
+            in_file(
+                c,
+                name(i),
+                fit_oil_column(name(i), &c.records[i], fs, &og, m),
+            )
+        }),
         (Some(_), None) => Err(IdentifyError::NeedsUpstream {
             what: "oil column".into(),
             needs: "the identified mass".into(),
@@ -285,6 +291,19 @@ pub fn identify_screened(s: &Screening) -> Identification {
         missing,
         screening: s.findings.clone(),
         welch,
+        unknown_inputs,
+    }
+}
+
+/// The parameter-file key of controller gain `gain`.
+fn controller_key(gain: &str) -> &'static str {
+    match gain {
+        "kp" => "controller.kp",
+        "kv" => "controller.kv",
+        "ka" => "controller.ka",
+        "fv" => "controller.fv",
+        "fa" => "controller.fa",
+        _ => "controller.kdp",
     }
 }
 
@@ -341,7 +360,17 @@ impl Identification {
 
     /// The parameter-file keys that hold a default, not an identified value, and why.
     pub fn defaults(&self) -> Vec<(&'static str, &'static str)> {
-        let mut d = Vec::new();
+        let mut d: Vec<(&'static str, &'static str)> = self
+            .unknown_inputs
+            .iter()
+            .map(|k| {
+                (
+                    *k,
+                    "not in campaign.toml and not identified from these recordings: \
+                     TREES Lab default written, not a property of this table",
+                )
+            })
+            .collect();
         let mut add = |missing: bool, keys: &[&'static str], why: &'static str| {
             if missing {
                 d.extend(keys.iter().map(|k| (*k, why)));

@@ -15,6 +15,44 @@ use num_complex::Complex64;
 use std::f64::consts::PI;
 
 /// `F / x_v` of the ideal actuator on a table of apparent stiffness `Z(s) = M s^2 + c s + k`:
+/// The geometry the oil-column fit needs, all known.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct OilGeometry {
+    pub piston_area_m2: f64,
+    pub total_oil_volume_m3: f64,
+    pub flow_gain_m3_s: f64,
+}
+
+impl OilGeometry {
+    /// From the campaign's `[geometry]`, or the error naming the keys nobody gave: the
+    /// spool-to-force FRF fixes `Kq A` and `A^2 / k_oil` together, so without the piston
+    /// area, the flow gain and the oil volume the bulk modulus and leakage cannot be told.
+    pub fn from_campaign(g: &crate::campaign::Geometry) -> Result<OilGeometry, IdentifyError> {
+        match (g.piston_area_m2, g.total_oil_volume_m3, g.flow_gain_m3_s) {
+            (Some(a), Some(v), Some(q)) => Ok(OilGeometry {
+                piston_area_m2: a,
+                total_oil_volume_m3: v,
+                flow_gain_m3_s: q,
+            }),
+            _ => {
+                let unknown: Vec<&str> = [
+                    ("geometry.piston_area_m2", g.piston_area_m2),
+                    ("geometry.total_oil_volume_m3", g.total_oil_volume_m3),
+                    ("geometry.flow_gain_m3_s", g.flow_gain_m3_s),
+                ]
+                .iter()
+                .filter(|(_, v)| v.is_none())
+                .map(|(k, _)| *k)
+                .collect();
+                Err(IdentifyError::NeedsUpstream {
+                    what: "oil column (bulk modulus, leakage)".into(),
+                    needs: format!("{} in campaign.toml (unknown)", unknown.join(", ")),
+                })
+            }
+        }
+    }
+}
+
 /// `g Kq A / ((A^2/k_oil) s + A^2 s / Z(s) + C_l)` (spec section 4).
 pub(super) fn spool_to_force_model(
     s: Complex64,
@@ -35,7 +73,7 @@ pub fn fit_oil_column(
     name: &str,
     rec: &Record,
     fs: f64,
-    geometry: &crate::campaign::Geometry,
+    geometry: &OilGeometry,
     mass_kg: f64,
 ) -> Result<OilColumnFit, IdentifyError> {
     let x = spool_channel(rec).ok_or_else(|| IdentifyError::MissingChannel {

@@ -175,4 +175,8 @@ pub struct Identification {
     /// What the screening of the records found and did.
     pub screening: Vec<Finding>,
     pub welch: WelchOptions,
+    /// Parameter-file keys of geometry and gains the campaign does not give (kept at the
+    /// defaults in `params` and listed by [`Identification::defaults`]).
+    #[serde(skip)]
+    pub unknown_inputs: Vec<&'static str>,
 }

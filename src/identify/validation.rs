@@ -31,7 +31,7 @@ pub fn validate(c: &Campaign, name: &str, params: &Params) -> Result<Validation,
         .ok_or_else(|| IdentifyError::not_usable(format!("no {name} test: validation skipped")))?;
     let fs = c.info.sample_rate_hz;
     let mut p = *params;
-    p.controller = c.controller_for(spec);
+    p.controller = c.controller_for(spec).map_err(IdentifyError::not_usable)?;
     let meas = table_tf_of(rec, fs)?;
     let idx = meas.band(VALIDATION_BAND_HZ[0], VALIDATION_BAND_HZ[1]);
     let h: Vec<Complex64> = idx.iter().map(|&i| meas.h1[i]).collect();

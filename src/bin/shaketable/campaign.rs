@@ -262,8 +262,29 @@ fn run_check(a: CheckArgs) -> anyhow::Result<()> {
         println!("screening: {f}");
     }
     let mut p = shaketable::Params::trees_lab();
-    c.info.geometry.apply_to(&mut p);
-    p.controller = c.info.controller;
+    let mut unknown = c.info.geometry.apply_to(&mut p);
+    match c.info.controller.complete() {
+        Ok(k) => p.controller = k,
+        Err(gains) => unknown.extend(gains.iter().map(|g| match *g {
+            "kp" => "controller.kp",
+            "kv" => "controller.kv",
+            "ka" => "controller.ka",
+            "fv" => "controller.fv",
+            "fa" => "controller.fa",
+            _ => "controller.kdp",
+        })),
+    }
+    if !unknown.is_empty() {
+        println!(
+            "unknown (not in campaign.toml): {}; identification estimates what the recordings \
+             allow and reports the rest as not identified",
+            unknown.join(", ")
+        );
+    }
+    if let Err(e) = c.gains_known() {
+        println!("not simulated: {e}");
+        return Ok(());
+    }
     let tests: Vec<_> = c.info.tests.iter().cloned().enumerate().collect();
     warn_if_unstable(
         &p,

@@ -255,7 +255,11 @@ fn apply_test_controller(
             gains
         );
     }
-    if info.controller != params.controller {
+    if info
+        .controller
+        .complete()
+        .is_ok_and(|k| k != params.controller)
+    {
         eprintln!(
             "note: the parameter file's [controller] differs from the campaign's; \
              simulating with the parameter file's gains (plus the test override)"

@@ -146,7 +146,11 @@ pub(super) fn parse_csv(
                 }
             }
         }
-        if row.len() > width || (strict && row.len() < width) {
+        // a lab file's last column may be a text note that holds the delimiter itself
+        // (a DAQ's "DAQ Pause, DAQ Stop" event): when nothing can map it (it is already
+        // text), the surplus cells are the rest of that note
+        let text_tail = !strict && width > 0 && t.bad[width - 1].is_some();
+        if (row.len() > width && !text_tail) || (strict && row.len() < width) {
             let header = match t.header_line {
                 0 => "the first row".to_string(),
                 h => format!("the header (line {h})"),

@@ -34,7 +34,7 @@ pub use super::files::{MAX_RECORD_BYTES, MAX_TOML_BYTES};
 use super::{
     Campaign, CampaignInfo, Control, ControllerOverride, Geometry, Record, TestKind, TestSpec,
 };
-use crate::params::{self, Controller, Rule};
+use crate::params::{self, Rule};
 use rayon::prelude::*;
 use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};

@@ -197,27 +197,6 @@ pub(super) fn lookup<'t>(t: &'t RawTable, key: &str) -> Option<&'t Spanned<toml:
     t.iter().find(|(k, _)| k.get_ref() == key).map(|(_, v)| v)
 }
 
-/// A required number of a table whose header is at `table_off`.
-pub(super) fn required_number(
-    lines: &Lines,
-    t: &RawTable,
-    table_off: usize,
-    test: Option<&str>,
-    key: &str,
-    check: Bound,
-    what: &str,
-) -> Result<f64, CampaignError> {
-    match lookup(t, key) {
-        Some(v) => number(lines, v, test, key, check),
-        None => Err(lines.err(
-            Some(table_off),
-            test,
-            Some(key),
-            format!("required key is missing ({what})"),
-        )),
-    }
-}
-
 pub(super) fn required_string<'t>(
     lines: &Lines,
     t: &'t RawTable,
@@ -248,10 +227,12 @@ pub(super) fn required_string<'t>(
 pub(super) const GAINS: [&str; 6] = ["kp", "kv", "ka", "fv", "fa", "kdp"];
 
 /// `[controller]`: every gain required, finite; unknown gains are errors.
+/// `[controller]`: each gain given is checked; one not given is unknown
+/// (campaign-format.md).
 pub(super) fn read_controller(
     lines: &Lines,
     c: &Spanned<RawTable>,
-) -> Result<Controller, CampaignError> {
+) -> Result<ControllerOverride, CampaignError> {
     let off = c.span().start;
     let t = c.get_ref();
     for (k, _) in t.iter() {
@@ -267,19 +248,16 @@ pub(super) fn read_controller(
             ));
         }
     }
-    let g = |key: &str| {
-        required_number(
-            lines,
-            t,
-            off,
-            None,
-            key,
-            gain_check(key),
-            "every TVC gain of spec section 2 must be given in [controller]",
-        )
-        .map_err(|e| rename_key(e, &format!("controller.{key}")))
+    let _ = off;
+    let g = |key: &str| -> Result<Option<f64>, CampaignError> {
+        lookup(t, key)
+            .map(|v| {
+                number(lines, v, None, key, gain_check(key))
+                    .map_err(|e| rename_key(e, &format!("controller.{key}")))
+            })
+            .transpose()
     };
-    Ok(Controller {
+    Ok(ControllerOverride {
         kp: g("kp")?,
         kv: g("kv")?,
         ka: g("ka")?,
@@ -421,18 +399,25 @@ pub(super) fn read_test(
         return Err(lines.err(Some(file_off), tn, Some("file"), "file name is empty"));
     }
     check_test_file(lines, file, file_off, tn)?;
-    let (kind_s, kind_off) =
-        required_string(lines, t, off, tn, "kind", "random | sine | triangle")?;
+    let (kind_s, kind_off) = required_string(
+        lines,
+        t,
+        off,
+        tn,
+        "kind",
+        "random | sine | triangle | record",
+    )?;
     let kind = match kind_s {
         "random" => TestKind::Random,
         "sine" => TestKind::Sine,
         "triangle" => TestKind::Triangle,
+        "record" => TestKind::Record,
         other => {
             return Err(lines.err(
                 Some(kind_off),
                 tn,
                 Some("kind"),
-                format!("unknown kind `{other}`; expected random | sine | triangle"),
+                format!("unknown kind `{other}`; expected random | sine | triangle | record"),
             ))
         }
     };
@@ -559,6 +544,8 @@ pub(super) fn read_test(
                 ));
             }
         }
+        // any reference: nothing more is needed
+        TestKind::Record => {}
     }
     if let Some(v) = lookup(t, "controller") {
         spec.controller = read_override(lines, v, &name)?;
@@ -620,20 +607,16 @@ pub fn parse_campaign_toml_planned(
             ))
         }
     };
+    // every key of [geometry] and [controller] is optional: one not given is unknown
     let geometry = match &doc.geometry {
         Some(g) => {
-            let off = g.span().start;
-            let get = |key: &str, bound: Bound| {
-                required_number(
-                    &lines,
-                    g.get_ref(),
-                    off,
-                    None,
-                    key,
-                    bound,
-                    "manufacturer geometry, spec section 4",
-                )
-                .map_err(|e| rename_key(e, &format!("geometry.{key}")))
+            let get = |key: &str, bound: Bound| -> Result<Option<f64>, CampaignError> {
+                lookup(g.get_ref(), key)
+                    .map(|v| {
+                        number(&lines, v, None, key, bound)
+                            .map_err(|e| rename_key(e, &format!("geometry.{key}")))
+                    })
+                    .transpose()
             };
             Geometry {
                 piston_area_m2: get("piston_area_m2", PISTON_AREA_M2)?,
@@ -642,25 +625,11 @@ pub fn parse_campaign_toml_planned(
                 flow_gain_m3_s: get("flow_gain_m3_s", FLOW_GAIN_M3_S)?,
             }
         }
-        None => {
-            return Err(lines.err(
-                None,
-                None,
-                Some("geometry"),
-                "required table [geometry] is missing (piston_area_m2, total_oil_volume_m3, supply_pressure_pa, flow_gain_m3_s)",
-            ))
-        }
+        None => Geometry::default(),
     };
     let controller = match &doc.controller {
         Some(c) => read_controller(&lines, c)?,
-        None => {
-            return Err(lines.err(
-                None,
-                None,
-                Some("controller"),
-                "required table [controller] is missing (kp, kv, ka, fv, fa, kdp)",
-            ))
-        }
+        None => ControllerOverride::default(),
     };
     let raw_tests = match &doc.test {
         Some(t) if !t.get_ref().is_empty() => t,

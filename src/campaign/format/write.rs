@@ -112,24 +112,20 @@ pub fn campaign_toml_string(info: &CampaignInfo) -> String {
         "sample_rate_hz = {}\n\n",
         toml_float(info.sample_rate_hz)
     ));
+    // the keys the campaign knows (an unknown one stays unwritten: unknown when read)
     let g = &info.geometry;
     s.push_str("[geometry]\n");
-    s.push_str(&format!(
-        "piston_area_m2 = {}\n",
-        toml_float(g.piston_area_m2)
-    ));
-    s.push_str(&format!(
-        "total_oil_volume_m3 = {}\n",
-        toml_float(g.total_oil_volume_m3)
-    ));
-    s.push_str(&format!(
-        "supply_pressure_pa = {}\n",
-        toml_float(g.supply_pressure_pa)
-    ));
-    s.push_str(&format!(
-        "flow_gain_m3_s = {}\n\n",
-        toml_float(g.flow_gain_m3_s)
-    ));
+    for (k, v) in [
+        ("piston_area_m2", g.piston_area_m2),
+        ("total_oil_volume_m3", g.total_oil_volume_m3),
+        ("supply_pressure_pa", g.supply_pressure_pa),
+        ("flow_gain_m3_s", g.flow_gain_m3_s),
+    ] {
+        if let Some(v) = v {
+            s.push_str(&format!("{k} = {}\n", toml_float(v)));
+        }
+    }
+    s.push('\n');
     let c = &info.controller;
     s.push_str("[controller]\n");
     for (k, v) in [
@@ -140,7 +136,9 @@ pub fn campaign_toml_string(info: &CampaignInfo) -> String {
         ("fa", c.fa),
         ("kdp", c.kdp),
     ] {
-        s.push_str(&format!("{k} = {}\n", toml_float(v)));
+        if let Some(v) = v {
+            s.push_str(&format!("{k} = {}\n", toml_float(v)));
+        }
     }
     for t in &info.tests {
         s.push_str("\n[[test]]\n");
@@ -150,6 +148,7 @@ pub fn campaign_toml_string(info: &CampaignInfo) -> String {
             TestKind::Random => "random",
             TestKind::Sine => "sine",
             TestKind::Triangle => "triangle",
+            TestKind::Record => "record",
         };
         let control = match t.control {
             Control::Displacement => "displacement",

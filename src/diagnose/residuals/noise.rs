@@ -165,10 +165,13 @@ pub fn estimate_noise(c: &Campaign) -> NoiseFloor {
             }
         })
         .collect();
+    // the gains are known: `diagnose` refuses a campaign without them
     let k = &c.info.controller;
-    let from_gains =
-        ((k.kp * sensor[0]).powi(2) + (k.ka * sensor[1]).powi(2) + (k.kdp * sensor[2]).powi(2))
-            .sqrt();
+    let gain = |g: Option<f64>| g.unwrap_or(0.0);
+    let from_gains = ((gain(k.kp) * sensor[0]).powi(2)
+        + (gain(k.ka) * sensor[1]).powi(2)
+        + (gain(k.kdp) * sensor[2]).powi(2))
+    .sqrt();
     let su = if have_rest && rest[4].is_finite() {
         rest[4].max(from_gains)
     } else {

@@ -19,7 +19,11 @@ pub fn simulate_test_with(
     noise: Option<&[SensorNoise]>,
 ) -> Vec<Outputs> {
     let mut q = *p;
-    q.controller = c.controller_for(&c.info.tests[i]);
+    // `diagnose` refuses a campaign with unknown gains before any simulation
+    // ([`crate::campaign::Campaign::gains_known`]); an unknown one keeps `p`'s
+    if let Ok(k) = c.controller_for(&c.info.tests[i]) {
+        q.controller = k;
+    }
     let inputs = c.records[i].inputs();
     let end = part.range(inputs.len()).end;
     simulate_run_with(
