@@ -223,15 +223,23 @@ fn lab_form_mistakes_are_named() {
     assert!(e.contains("R1.txt: line 7"), "{e}");
     // an event note holding the delimiter is the rest of that text column (real DAQs
     // write "DAQ Pause, DAQ Stop")...
-    let e = lab_error("", |t| t.replacen("; DAQ Start", "; DAQ Pause; DAQ Stop", 1));
-    assert_eq!(e, "", "a note with the delimiter in the last, text column reads");
+    let e = lab_error("", |t| {
+        t.replacen("; DAQ Start", "; DAQ Pause; DAQ Stop", 1)
+    });
+    assert_eq!(
+        e, "",
+        "a note with the delimiter in the last, text column reads"
+    );
     // ... but a surplus cell after a numeric last column is a ragged row
     let e = lab_error("", |t| {
         t.replacen("; Spool; Events", "; Spool", 1)
             .replacen("; DAQ Start", "", 1)
             .replacen(" PM; ", " PM; 1; ", 2)
     });
-    assert!(e.contains("ragged row: 9 cells but the header (line 7) has 8"), "{e}");
+    assert!(
+        e.contains("ragged row: 9 cells but the header (line 7) has 8"),
+        "{e}"
+    );
     // a text cell in a used column names its line; in an unused one it is no error
     let e = lab_error("", |t| {
         let mut lines: Vec<String> = t.lines().map(str::to_string).collect();

@@ -347,3 +347,54 @@ pub(super) fn diagnose_with(
         identification: id,
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    const NAN: f64 = f64::NAN;
+
+    #[test]
+    fn a_missed_cell_is_one_above_the_miss_ratio_and_absent_cells_never_are() {
+        let rows = [
+            [1.0, MISS_RATIO, MISS_RATIO * 1.01, NAN, 0.5],
+            [0.2, 0.3, NAN, NAN, 1.4],
+        ];
+        let m = Missed::of(&rows);
+        assert!(m.any);
+        assert_eq!(m.cells[0], [false, false, true, false, false]);
+        assert_eq!(m.cells[1], [false; 5]);
+        // candidates are scored on that cell alone
+        let trial = [[9.0, 9.0, 3.0, NAN, 9.0], [9.0, 9.0, NAN, NAN, 9.0]];
+        assert_eq!(m.rms(&trial), 3.0);
+    }
+
+    #[test]
+    fn with_nothing_missed_every_present_cell_counts_and_a_divergence_is_not_hidden() {
+        let rows = [[1.0, 1.2, NAN, 0.9, 1.1]];
+        let m = Missed::of(&rows);
+        assert!(!m.any);
+        let trial = [[2.0, 2.0, NAN, 2.0, 2.0]];
+        assert_eq!(m.rms(&trial), 2.0);
+        // a diverged run scores infinite cells: they count, they do not vanish like NaN
+        let diverged = [[2.0, f64::INFINITY, NAN, 2.0, 2.0]];
+        assert_eq!(m.rms(&diverged), f64::INFINITY);
+    }
+
+    #[test]
+    fn a_candidate_explains_the_data_up_to_the_explained_ratio() {
+        let mut c = Candidate {
+            effect: Effect::Specimen,
+            parameters: Default::default(),
+            heldout_residual: EXPLAINED_RATIO,
+            score: 1.0,
+            fit_residual: 1.0,
+            params: Params::default(),
+            heldout_rows: Vec::new(),
+            score_rows: Vec::new(),
+        };
+        assert!(explains(&c));
+        c.heldout_residual = EXPLAINED_RATIO * 1.001;
+        assert!(!explains(&c));
+    }
+}
