@@ -1,5 +1,6 @@
 #!/usr/bin/env bash
-# Build the FMI 2.0 Co-Simulation FMU: target/fmu/ShakeTable.fmu
+# Build the FMI 2.0 FMU (Co-Simulation and Model Exchange), target/fmu/ShakeTable.fmu, and
+# the FMI 3.0 Co-Simulation FMU beside it, target/fmu/ShakeTable3.fmu
 #   scripts/build_fmu.sh                    # TREES Lab defaults as start values
 #   scripts/build_fmu.sh --params lab.toml  # a lab's parameter file baked in
 # The cdylib is built in release and packaged with modelDescription.xml (generated from
@@ -55,7 +56,8 @@ GENERATED_AT="$(date -u ${SOURCE_DATE_EPOCH:+-d @$SOURCE_DATE_EPOCH} +%Y-%m-%dT%
 "$BIN" fmu documentation "${ARGS[@]}" > "$STAGE/documentation/index.html"
 "$BIN" fmu icon --out "$STAGE/model.png"
 cp "$SO" "$STAGE/binaries/linux64/ShakeTable.so"
-python3 - "$STAGE" "$OUT" <<'PY'
+zip_stage() {
+  python3 - "$1" "$2" <<'PY'
 import os, sys, zipfile
 stage, out = sys.argv[1], sys.argv[2]
 with zipfile.ZipFile(out, "w", zipfile.ZIP_DEFLATED) as z:
@@ -64,5 +66,20 @@ with zipfile.ZipFile(out, "w", zipfile.ZIP_DEFLATED) as z:
             p = os.path.join(d, f)
             z.write(p, os.path.relpath(p, stage))
 PY
-rm -rf "$STAGE"
+}
+zip_stage "$STAGE" "$OUT"
 echo "wrote $OUT"
+
+# The FMI 3.0 Co-Simulation FMU beside it (same binary, which exports both APIs): its own
+# description, the binary under FMI 3.0's platform tuple, the icon under terminalsAndIcons/.
+OUT3="${OUT%.fmu}3.fmu"
+STAGE3="$(dirname "$OUT")/.stage-$(basename "$OUT3" .fmu)-$$"
+mkdir -p "$STAGE3/binaries/x86_64-linux" "$STAGE3/documentation" "$STAGE3/resources" "$STAGE3/terminalsAndIcons"
+cp "$STAGE/resources/parameters.toml" "$STAGE3/resources/parameters.toml"
+cp "$STAGE/documentation/index.html" "$STAGE3/documentation/index.html"
+cp "$STAGE/model.png" "$STAGE3/terminalsAndIcons/icon.png"
+cp "$SO" "$STAGE3/binaries/x86_64-linux/ShakeTable.so"
+"$BIN" fmu description "${ARGS[@]}" --fmi-version 3 --generated-at "$GENERATED_AT" > "$STAGE3/modelDescription.xml"
+zip_stage "$STAGE3" "$OUT3"
+rm -rf "$STAGE" "$STAGE3"
+echo "wrote $OUT3"

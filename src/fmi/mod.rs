@@ -7,6 +7,7 @@
 
 pub mod export;
 pub mod export_me;
+pub mod fmi3;
 pub mod icon;
 pub mod instance;
 pub mod model_description;

@@ -14,17 +14,18 @@ use std::io::Cursor;
 pub const MODEL_IDENTIFIER: &str = "ShakeTable";
 
 /// The GUID's stand-in while the text the GUID is computed from is written.
-const GUID_PLACEHOLDER: &str = "{00000000-0000-0000-0000-000000000000}";
+pub(super) const GUID_PLACEHOLDER: &str = "{00000000-0000-0000-0000-000000000000}";
 
 /// Namespace of the GUIDs (UUID v5): fixed, so equal descriptions give equal GUIDs.
-const GUID_NAMESPACE: uuid::Uuid = uuid::Uuid::from_u128(0x5e1d7a3c_9b7f_4d2e_8a61_2c0f4b7d9e13);
+pub(super) const GUID_NAMESPACE: uuid::Uuid =
+    uuid::Uuid::from_u128(0x5e1d7a3c_9b7f_4d2e_8a61_2c0f4b7d9e13);
 
 /// The header attributes that say who made the FMU and under which terms.
-const AUTHOR: &str = "shaketable developers";
-const COPYRIGHT: &str = "Copyright (c) 2026 the shaketable developers";
-const LICENSE: &str = env!("CARGO_PKG_LICENSE");
+pub(super) const AUTHOR: &str = "shaketable developers";
+pub(super) const COPYRIGHT: &str = "Copyright (c) 2026 the shaketable developers";
+pub(super) const LICENSE: &str = env!("CARGO_PKG_LICENSE");
 
-fn fmt_real(x: f64) -> String {
+pub(super) fn fmt_real(x: f64) -> String {
     let mut b = ryu::Buffer::new();
     b.format(x).to_string()
 }
@@ -58,15 +59,45 @@ pub fn declares_start(v: &Variable) -> bool {
     matches!(v.role, Role::Input(_) | Role::Parameter(..))
 }
 
-/// The GUID of the description for parameters `p`: a UUID v5 of its text (without the
-/// generation date), so it changes with the start values, the variables and the version,
-/// and the binary recomputes it from the parameters it starts from (fmi2Instantiate).
-pub fn guid(p: &Params) -> String {
-    let text = description_xml(p, GUID_PLACEHOLDER, None);
+/// A UUID v5 of a description's text, in braces: the GUID (FMI 2.0) or the
+/// instantiation token (FMI 3.0).
+pub(super) fn token_of(text: &str) -> String {
     format!(
         "{{{}}}",
         uuid::Uuid::new_v5(&GUID_NAMESPACE, text.as_bytes()).hyphenated()
     )
+}
+
+/// The header attributes both FMI versions share (after the version and the token).
+pub(super) fn header_attributes(generated_at: Option<&str>) -> Vec<(&'static str, &str)> {
+    let mut a = vec![
+        ("author", AUTHOR),
+        ("version", env!("CARGO_PKG_VERSION")),
+        ("copyright", COPYRIGHT),
+        ("license", LICENSE),
+        (
+            "generationTool",
+            concat!("shaketable ", env!("CARGO_PKG_VERSION")),
+        ),
+    ];
+    if let Some(date) = generated_at {
+        a.push(("generationDateAndTime", date));
+    }
+    a.push(("variableNamingConvention", "structured"));
+    a
+}
+
+/// The model's description in both FMI versions.
+pub(super) const MODEL_SUMMARY: &str =
+    "Servo-hydraulic uni-axial shake table (EUCENTRE TREES Lab model): three-variable \
+     controller, servovalve, actuator and oil column, table with bearing friction, and \
+     optional specimen, foundation, stick-slip, flow saturation and valve deadband";
+
+/// The GUID of the description for parameters `p`: a UUID v5 of its text (without the
+/// generation date), so it changes with the start values, the variables and the version,
+/// and the binary recomputes it from the parameters it starts from (fmi2Instantiate).
+pub fn guid(p: &Params) -> String {
+    token_of(&description_xml(p, GUID_PLACEHOLDER, None))
 }
 
 /// The XML for parameters `p` (their values become the parameters' start values), without
@@ -82,23 +113,23 @@ pub fn model_description_xml_at(p: &Params, generated_at: &str) -> String {
 }
 
 /// Writes XML events into a buffer (writing into a `Vec` cannot fail).
-struct Xml(Writer<Cursor<Vec<u8>>>);
+pub(super) struct Xml(pub(super) Writer<Cursor<Vec<u8>>>);
 
 impl Xml {
-    fn put(&mut self, e: Event) {
+    pub(super) fn put(&mut self, e: Event) {
         let _ = self.0.write_event(e);
     }
-    fn start(&mut self, tag: &str, attributes: &[(&str, &str)]) {
+    pub(super) fn start(&mut self, tag: &str, attributes: &[(&str, &str)]) {
         let mut e = BytesStart::new(tag);
         e.extend_attributes(attributes.iter().copied());
         self.put(Event::Start(e));
     }
-    fn empty(&mut self, tag: &str, attributes: &[(&str, &str)]) {
+    pub(super) fn empty(&mut self, tag: &str, attributes: &[(&str, &str)]) {
         let mut e = BytesStart::new(tag);
         e.extend_attributes(attributes.iter().copied());
         self.put(Event::Empty(e));
     }
-    fn end(&mut self, tag: &str) {
+    pub(super) fn end(&mut self, tag: &str) {
         self.put(Event::End(BytesEnd::new(tag)));
     }
 }
@@ -110,25 +141,9 @@ fn description_xml(p: &Params, guid: &str, generated_at: Option<&str>) -> String
         ("fmiVersion", "2.0"),
         ("modelName", MODEL_IDENTIFIER),
         ("guid", guid),
-        (
-            "description",
-            "Servo-hydraulic uni-axial shake table (EUCENTRE TREES Lab model): three-variable \
-             controller, servovalve, actuator and oil column, table with bearing friction, and \
-             optional specimen, foundation, stick-slip, flow saturation and valve deadband",
-        ),
-        ("author", AUTHOR),
-        ("version", env!("CARGO_PKG_VERSION")),
-        ("copyright", COPYRIGHT),
-        ("license", LICENSE),
-        (
-            "generationTool",
-            concat!("shaketable ", env!("CARGO_PKG_VERSION")),
-        ),
+        ("description", MODEL_SUMMARY),
     ];
-    if let Some(date) = generated_at {
-        root.push(("generationDateAndTime", date));
-    }
-    root.push(("variableNamingConvention", "structured"));
+    root.extend(header_attributes(generated_at));
     let indicators = EVENT_INDICATOR_COUNT.to_string();
     root.push(("numberOfEventIndicators", &indicators));
     x.start("fmiModelDescription", &root);
@@ -188,7 +203,7 @@ fn co_simulation(x: &mut Xml) {
 }
 
 /// The units the variables use, with the display units labs read them in.
-fn unit_definitions(x: &mut Xml) {
+pub(super) fn unit_definitions(x: &mut Xml) {
     x.start("UnitDefinitions", &[]);
     for u in UNITS
         .iter()

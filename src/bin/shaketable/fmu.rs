@@ -21,6 +21,10 @@ enum What {
         /// not given, so the committed copy is reproducible.
         #[arg(long, value_name = "DATE")]
         generated_at: Option<String>,
+        /// FMI version of the description: 2 (Co-Simulation and Model Exchange,
+        /// ShakeTable.fmu) or 3 (Co-Simulation, ShakeTable3.fmu).
+        #[arg(long, default_value_t = 2, value_parser = clap::value_parser!(u8).range(2..=3))]
+        fmi_version: u8,
     },
     /// Write model.png, the FMU's icon.
     Icon {
@@ -51,15 +55,20 @@ pub fn run(args: Args) -> anyhow::Result<()> {
         What::Description {
             params,
             generated_at,
+            fmi_version,
         } => {
             let p = crate::load_params(params.as_deref())?;
-            match generated_at {
-                Some(date) => {
-                    check_date(&date)?;
-                    print!("{}", model_description_xml_at(&p, &date))
-                }
-                None => print!("{}", model_description_xml(&p)),
+            if let Some(date) = &generated_at {
+                check_date(date)?;
             }
+            let xml = match (fmi_version, generated_at.as_deref()) {
+                (3, date) => {
+                    shaketable::fmi::fmi3::model_description::model_description_xml(&p, date)
+                }
+                (_, Some(date)) => model_description_xml_at(&p, date),
+                (_, None) => model_description_xml(&p),
+            };
+            print!("{xml}");
         }
         What::Icon { out, force } => {
             use shaketable::output::{check_file, write_via_temp, Inputs};
