@@ -19,7 +19,9 @@ unsafe extern "C" fn logger(
     _category: fmi3String,
     message: fmi3String,
 ) {
-    let m = unsafe { CStr::from_ptr(message) }.to_string_lossy().into_owned();
+    let m = unsafe { CStr::from_ptr(message) }
+        .to_string_lossy()
+        .into_owned();
     LOG.lock().unwrap().push(m);
 }
 
@@ -63,7 +65,10 @@ fn steps_match_the_library_simulator_bit_for_bit() {
     let i = instantiate("steps", &instantiation_token(&Params::trees_lab()));
     assert!(!i.is_null(), "{:?}", LOG.lock().unwrap());
     unsafe {
-        assert_eq!(fmi3EnterInitializationMode(i, false, 0.0, 0.0, false, 0.0), fmi3Status_fmi3OK);
+        assert_eq!(
+            fmi3EnterInitializationMode(i, false, 0.0, 0.0, false, 0.0),
+            fmi3Status_fmi3OK
+        );
         assert_eq!(fmi3ExitInitializationMode(i), fmi3Status_fmi3OK);
     }
     let mut sim = Simulator::new(Model::new(&Params::trees_lab()), 0.0, DEFAULT_MAX_SUBSTEP_S);
@@ -81,10 +86,20 @@ fn steps_match_the_library_simulator_bit_for_bit() {
             assert!(!event && !stop && !early);
             assert_eq!(last, t + h);
         }
-        sim.advance(h, &inputs_from(&u), &inputs_from(&u), &SensorNoise::default());
+        sim.advance(
+            h,
+            &inputs_from(&u),
+            &inputs_from(&u),
+            &SensorNoise::default(),
+        );
         t += h;
         let o = sim.outputs(&inputs_from(&u), &SensorNoise::default());
-        let want = [o.displacement_m, o.velocity_m_s, o.acceleration_m_s2, o.actuator_force_n];
+        let want = [
+            o.displacement_m,
+            o.velocity_m_s,
+            o.acceleration_m_s2,
+            o.actuator_force_n,
+        ];
         assert_eq!(bits(&get(i, &OUTPUTS[..4])), bits(&want), "step {k}");
     }
     assert_eq!(get(i, &[TIME_VR]), vec![t]);
@@ -102,7 +117,10 @@ fn the_token_belongs_to_the_start_values() {
         .any(|m| m.contains("instantiationToken") && m.contains("start values")));
     let mut heavier = Params::trees_lab();
     heavier.table.mass_kg *= 2.0;
-    assert_ne!(instantiation_token(&heavier), instantiation_token(&Params::trees_lab()));
+    assert_ne!(
+        instantiation_token(&heavier),
+        instantiation_token(&Params::trees_lab())
+    );
 }
 
 #[test]
@@ -123,14 +141,20 @@ fn fmu_state_round_trips_and_unoffered_functions_are_refused() {
         let mut size = 0;
         fmi3SerializedFMUStateSize(i, state, &mut size);
         let mut bytes = vec![0u8; size];
-        assert_eq!(fmi3SerializeFMUState(i, state, bytes.as_mut_ptr(), size), fmi3Status_fmi3OK);
+        assert_eq!(
+            fmi3SerializeFMUState(i, state, bytes.as_mut_ptr(), size),
+            fmi3Status_fmi3OK
+        );
         let before = get(i, &OUTPUTS);
         for k in 20..40 {
             fmi3DoStep(i, k as f64 * h, h, true, &mut e, &mut s, &mut r, &mut l);
         }
         assert_ne!(get(i, &OUTPUTS), before);
         let mut restored: fmi3FMUState = std::ptr::null_mut();
-        assert_eq!(fmi3DeserializeFMUState(i, bytes.as_ptr(), size, &mut restored), fmi3Status_fmi3OK);
+        assert_eq!(
+            fmi3DeserializeFMUState(i, bytes.as_ptr(), size, &mut restored),
+            fmi3Status_fmi3OK
+        );
         assert_eq!(fmi3SetFMUState(i, restored), fmi3Status_fmi3OK);
         assert_eq!(bits(&get(i, &OUTPUTS)), bits(&before));
         fmi3FreeFMUState(i, &mut state);
@@ -139,12 +163,19 @@ fn fmu_state_round_trips_and_unoffered_functions_are_refused() {
         // the enumeration travels as Int64; a value outside it is refused
         let mut model = [0i64];
         let vr = [110u32];
-        assert_eq!(fmi3GetInt64(i, vr.as_ptr(), 1, model.as_mut_ptr(), 1), fmi3Status_fmi3OK);
+        assert_eq!(
+            fmi3GetInt64(i, vr.as_ptr(), 1, model.as_mut_ptr(), 1),
+            fmi3Status_fmi3OK
+        );
         assert_eq!(model[0], 3);
         // Model Exchange is not in this FMU: a clear refusal
         LOG.lock().unwrap().clear();
         assert_eq!(fmi3EnterContinuousTimeMode(i), fmi3Status_fmi3Error);
-        assert!(LOG.lock().unwrap().iter().any(|m| m.contains("fmi3EnterContinuousTimeMode")));
+        assert!(LOG
+            .lock()
+            .unwrap()
+            .iter()
+            .any(|m| m.contains("fmi3EnterContinuousTimeMode")));
         fmi3FreeInstance(i);
     }
 }

@@ -137,6 +137,18 @@ impl ControllerOverride {
         }
     }
 
+    /// The parameter-file key of gain `gain` (`kp` -> `controller.kp`).
+    pub fn parameter_key(gain: &str) -> &'static str {
+        match gain {
+            "kp" => "controller.kp",
+            "kv" => "controller.kv",
+            "ka" => "controller.ka",
+            "fv" => "controller.fv",
+            "fa" => "controller.fa",
+            _ => "controller.kdp",
+        }
+    }
+
     /// The gains, if every one is known; else the names of those that are not.
     pub fn complete(&self) -> Result<Controller, Vec<&'static str>> {
         let named = [

@@ -252,14 +252,40 @@ fn type_definitions(x: &mut Xml) {
     x.end("TypeDefinitions");
 }
 
-fn scalar_variable(x: &mut Xml, v: &Variable, p: &Params) {
-    let vr = v.vr.to_string();
-    let (causality, variability, initial) = match v.role {
+/// Causality, variability and `initial` of a variable (the same in FMI 2.0 and 3.0).
+pub(super) fn kind_of_variable(v: &Variable) -> (&'static str, &'static str, Option<&'static str>) {
+    match v.role {
         Role::Input(_) => ("input", "continuous", None),
         Role::Output(_) => ("output", "continuous", Some("calculated")),
         Role::Parameter(..) => ("parameter", "fixed", Some("exact")),
         Role::State(_) | Role::Derivative(_) => ("local", "continuous", Some("calculated")),
-    };
+    }
+}
+
+/// The unit, display unit and bounds of a Real variable (from the validation rules).
+pub(super) fn real_attributes(v: &Variable) -> Vec<(&'static str, String)> {
+    let mut t: Vec<(&'static str, String)> = Vec::new();
+    if let Some(u) = v.unit {
+        t.push(("unit", u.into()));
+        if let Some((display, _)) = unit(u).and_then(|u| u.display) {
+            t.push(("displayUnit", display.into()));
+        }
+    }
+    if v.kind == Kind::Real {
+        let (min, max) = v
+            .key
+            .and_then(fmu_rule_of)
+            .map(|r| r.bounds())
+            .unwrap_or_default();
+        t.extend(min.map(|m| ("min", fmt_real(m))));
+        t.extend(max.map(|m| ("max", fmt_real(m))));
+    }
+    t
+}
+
+fn scalar_variable(x: &mut Xml, v: &Variable, p: &Params) {
+    let vr = v.vr.to_string();
+    let (causality, variability, initial) = kind_of_variable(v);
     let mut attributes = vec![
         ("name", v.name),
         ("valueReference", vr.as_str()),
@@ -281,21 +307,7 @@ fn scalar_variable(x: &mut Xml, v: &Variable, p: &Params) {
         (Kind::Integer, None) => "Integer",
         (Kind::Boolean, _) => "Boolean",
     };
-    if let Some(u) = v.unit {
-        t.push(("unit", u.into()));
-        if let Some((display, _)) = unit(u).and_then(|u| u.display) {
-            t.push(("displayUnit", display.into()));
-        }
-    }
-    if v.kind == Kind::Real {
-        let (min, max) = v
-            .key
-            .and_then(fmu_rule_of)
-            .map(|r| r.bounds())
-            .unwrap_or_default();
-        t.extend(min.map(|m| ("min", fmt_real(m))));
-        t.extend(max.map(|m| ("max", fmt_real(m))));
-    }
+    t.extend(real_attributes(v));
     if let Role::Derivative(k) = v.role {
         t.push(("derivative", state_index(k).to_string()));
     }

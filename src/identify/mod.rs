@@ -36,7 +36,7 @@ pub use servovalve::{fit_servovalve, relative_error};
 pub use validation::validate;
 
 use crate::campaign::screen::{screen, Action, Screening};
-use crate::campaign::{Campaign, Record};
+use crate::campaign::{Campaign, ControllerOverride, Record};
 use crate::linear::OilColumn;
 use crate::params::{ActuatorModel, Params};
 use frf::WelchOptions;
@@ -168,7 +168,9 @@ pub fn identify_screened(s: &Screening) -> Identification {
     let mut unknown_inputs = g.apply_to(&mut p);
     match c.info.controller.complete() {
         Ok(k) => p.controller = k,
-        Err(gains) => unknown_inputs.extend(gains.iter().map(|k| controller_key(k))),
+        Err(gains) => {
+            unknown_inputs.extend(gains.iter().map(|k| ControllerOverride::parameter_key(k)))
+        }
     }
 
     let roles = select::random_roles(c);
@@ -292,18 +294,6 @@ pub fn identify_screened(s: &Screening) -> Identification {
         screening: s.findings.clone(),
         welch,
         unknown_inputs,
-    }
-}
-
-/// The parameter-file key of controller gain `gain`.
-fn controller_key(gain: &str) -> &'static str {
-    match gain {
-        "kp" => "controller.kp",
-        "kv" => "controller.kv",
-        "ka" => "controller.ka",
-        "fv" => "controller.fv",
-        "fa" => "controller.fa",
-        _ => "controller.kdp",
     }
 }
 

@@ -214,6 +214,7 @@ fn rms_cell(x: Option<&[f64]>) -> String {
 }
 
 fn run_check(a: CheckArgs) -> anyhow::Result<()> {
+    use shaketable::campaign::ControllerOverride;
     let c = read_campaign(&a.dir).with_context(|| format!("campaign {}", a.dir.display()))?;
     println!(
         "{}: \"{}\", {} Hz",
@@ -265,14 +266,7 @@ fn run_check(a: CheckArgs) -> anyhow::Result<()> {
     let mut unknown = c.info.geometry.apply_to(&mut p);
     match c.info.controller.complete() {
         Ok(k) => p.controller = k,
-        Err(gains) => unknown.extend(gains.iter().map(|g| match *g {
-            "kp" => "controller.kp",
-            "kv" => "controller.kv",
-            "ka" => "controller.ka",
-            "fv" => "controller.fv",
-            "fa" => "controller.fa",
-            _ => "controller.kdp",
-        })),
+        Err(gains) => unknown.extend(gains.iter().map(|g| ControllerOverride::parameter_key(g))),
     }
     if !unknown.is_empty() {
         println!(

@@ -7,7 +7,7 @@
 #![allow(non_snake_case, clippy::missing_safety_doc, clippy::too_many_arguments)]
 
 use super::model_description::{instantiation_token, TIME_VR};
-use crate::fmi::export::start_params;
+use crate::fmi::export::{slice, slice_mut, start_params};
 use crate::fmi::instance::{deserialize, serialize, FmiError, Instance, Phase, Snapshot};
 use crate::fmi::variables::Kind;
 use fmi_sys::fmi3::*;
@@ -81,24 +81,6 @@ unsafe fn with(i: fmi3Instance, f: impl FnOnce(&mut Component) -> fmi3Status) ->
             );
             FATAL
         }
-    }
-}
-
-unsafe fn slice<'a, T>(p: *const T, n: usize) -> Option<&'a [T]> {
-    match (n, p.is_null()) {
-        (0, _) => Some(&[]),
-        (_, true) => None,
-        // SAFETY: the importer promises n elements at p.
-        _ => Some(unsafe { std::slice::from_raw_parts(p, n) }),
-    }
-}
-
-unsafe fn slice_mut<'a, T>(p: *mut T, n: usize) -> Option<&'a mut [T]> {
-    match (n, p.is_null()) {
-        (0, _) => Some(&mut []),
-        (_, true) => None,
-        // SAFETY: as above.
-        _ => Some(unsafe { std::slice::from_raw_parts_mut(p, n) }),
     }
 }
 

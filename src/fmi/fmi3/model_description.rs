@@ -4,11 +4,11 @@
 //! Co-Simulation and are not listed (FMI 2.0 lists them for its Model Exchange).
 
 use crate::fmi::model_description::{
-    fmt_real, header_attributes, start_value, token_of, unit_definitions, Xml, GUID_PLACEHOLDER,
-    MODEL_IDENTIFIER, MODEL_SUMMARY,
+    header_attributes, kind_of_variable, real_attributes, start_value, token_of, unit_definitions,
+    Xml, GUID_PLACEHOLDER, MODEL_IDENTIFIER, MODEL_SUMMARY,
 };
-use crate::fmi::variables::{unit, Kind, Role, Variable, INPUTS, VARIABLES};
-use crate::params::{fmu_rule_of, Params};
+use crate::fmi::variables::{Kind, Role, Variable, INPUTS, VARIABLES};
+use crate::params::Params;
 use quick_xml::events::{BytesDecl, Event};
 use quick_xml::Writer;
 use std::io::Cursor;
@@ -115,12 +115,7 @@ fn type_definitions(x: &mut Xml) {
 
 fn variable(x: &mut Xml, v: &Variable, p: &Params) {
     let vr = v.vr.to_string();
-    let (causality, variability, initial) = match v.role {
-        Role::Input(_) => ("input", "continuous", None),
-        Role::Output(_) => ("output", "continuous", Some("calculated")),
-        Role::Parameter(..) => ("parameter", "fixed", Some("exact")),
-        Role::State(_) | Role::Derivative(_) => ("local", "continuous", Some("calculated")),
-    };
+    let (causality, variability, initial) = kind_of_variable(v);
     let mut a: Vec<(&str, String)> = vec![
         ("name", v.name.into()),
         ("valueReference", vr),
@@ -138,21 +133,7 @@ fn variable(x: &mut Xml, v: &Variable, p: &Params) {
         (Kind::Real, _) => "Float64",
         (Kind::Boolean, _) => "Boolean",
     };
-    if let Some(u) = v.unit {
-        a.push(("unit", u.into()));
-        if let Some((display, _)) = unit(u).and_then(|u| u.display) {
-            a.push(("displayUnit", display.into()));
-        }
-    }
-    if v.kind == Kind::Real {
-        let (min, max) = v
-            .key
-            .and_then(fmu_rule_of)
-            .map(|r| r.bounds())
-            .unwrap_or_default();
-        a.extend(min.map(|m| ("min", fmt_real(m))));
-        a.extend(max.map(|m| ("max", fmt_real(m))));
-    }
+    a.extend(real_attributes(v));
     if matches!(v.role, Role::Input(_) | Role::Parameter(..)) {
         a.push(("start", start_value(v, p)));
     }
