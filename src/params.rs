@@ -210,8 +210,10 @@ impl Default for Friction {
     }
 }
 
+pub use crate::effects::flow_asymmetry::FlowAsymmetry;
 pub use crate::effects::flow_saturation::FlowSaturation;
 pub use crate::effects::foundation::Foundation;
+pub use crate::effects::friction_asymmetry::FrictionAsymmetry;
 pub use crate::effects::specimen::Specimen;
 pub use crate::effects::stick_slip::StickSlip;
 pub use crate::effects::valve_deadband::ValveDeadband;
@@ -253,6 +255,8 @@ pub struct Params {
     pub stick_slip: StickSlip,
     pub flow_saturation: FlowSaturation,
     pub valve_deadband: ValveDeadband,
+    pub friction_asymmetry: FrictionAsymmetry,
+    pub flow_asymmetry: FlowAsymmetry,
     pub limits: Limits,
 }
 

@@ -288,3 +288,88 @@ fn stick_slip_raises_force_at_reversals() {
         f1 - f0
     );
 }
+
+/// Friction asymmetry (spec section 7): on a slow sine, the actuator force that keeps
+/// the table sliding at mid-stroke (inertia and spring nil there, `Z` saturated) is
+/// `F_mu 2r/(1+r)` one way and `F_mu 2/(1+r)` the other: their ratio is `r`, their mean
+/// `F_mu`, as without the effect.
+#[test]
+fn friction_asymmetry_makes_one_direction_harder() {
+    let mid_stroke_forces = |p: &Params| {
+        let inputs = sine(0.05, 0.1, 20.0);
+        let out = run(p, &inputs);
+        let (mut up, mut down) = (Vec::new(), Vec::new());
+        for (k, o) in out.iter().enumerate().skip(out.len() / 4) {
+            if o.displacement_m.abs() < 0.1 * 0.05 {
+                let v = inputs[k].reference.velocity_m_s;
+                if v > 0.0 {
+                    up.push(o.actuator_force_n)
+                } else {
+                    down.push(o.actuator_force_n)
+                }
+            }
+        }
+        let mean = |x: &[f64]| x.iter().sum::<f64>() / x.len() as f64;
+        (mean(&up), -mean(&down))
+    };
+    let mut p = Params::trees_lab();
+    p.friction_asymmetry.enabled = true;
+    p.friction_asymmetry.ratio = 1.5;
+    let (up, down) = mid_stroke_forces(&p);
+    let f_mu = p.friction.force_n;
+    eprintln!("sliding forces {up:.0} N and {down:.0} N (F_mu {f_mu} N)");
+    assert!((up / down / 1.5 - 1.0).abs() < 0.05, "{up} / {down}");
+    assert!(((up + down) / 2.0 / f_mu - 1.0).abs() < 0.05, "{up} {down}");
+    let (up0, down0) = mid_stroke_forces(&Params::trees_lab());
+    assert!((up0 / down0 - 1.0).abs() < 0.03, "{up0} / {down0}");
+}
+
+/// Flow asymmetry (spec section 7): the same spool opening meters `r` times more flow
+/// one way than the other, for both actuators, and the table's reversal does not jump.
+#[test]
+fn flow_asymmetry_scales_the_flow_by_the_spool_sign() {
+    for actuator in [ActuatorModel::Ideal, ActuatorModel::Nonlinear] {
+        let mut p = Params::trees_lab();
+        p.actuator.model = actuator;
+        p.flow_asymmetry.enabled = true;
+        p.flow_asymmetry.ratio = 2.0;
+        let m = Model::new(&p);
+        let rate = |spool: f64| {
+            let mut s = m.rest_state();
+            s[ix::XV] = spool;
+            let mut ds = [0.0; shaketable::model::NX];
+            m.derivatives(
+                &s,
+                &Inputs::default(),
+                &SensorNoise::default(),
+                0.0,
+                &mut ds,
+            );
+            ds[ix::PA]
+        };
+        let (pos, neg) = (rate(0.01), rate(-0.01));
+        assert!(
+            (pos / -neg / 2.0 - 1.0).abs() < 1e-9,
+            "{actuator:?}: {pos} vs {neg}"
+        );
+        // the mean flow is the symmetric valve's
+        let sym = Model::new(&Params {
+            flow_asymmetry: Default::default(),
+            ..p
+        });
+        let mut s = sym.rest_state();
+        s[ix::XV] = 0.01;
+        let mut ds = [0.0; shaketable::model::NX];
+        sym.derivatives(
+            &s,
+            &Inputs::default(),
+            &SensorNoise::default(),
+            0.0,
+            &mut ds,
+        );
+        assert!(
+            ((pos - neg) / 2.0 / ds[ix::PA] - 1.0).abs() < 1e-9,
+            "{actuator:?}"
+        );
+    }
+}

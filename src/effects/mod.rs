@@ -18,8 +18,10 @@
 //! the FMU variable rows (`src/fmi/variables.rs`) and campaign synthesis read the
 //! catalogue; nothing else needs an edit.
 
+pub mod flow_asymmetry;
 pub mod flow_saturation;
 pub mod foundation;
+pub mod friction_asymmetry;
 pub mod oscillator;
 pub mod specimen;
 pub mod stick_slip;
@@ -122,12 +124,14 @@ pub(crate) use switch;
 
 /// Every effect, in catalogue order (spec section 7): the order of the parameter file,
 /// the FMU variables, validation and diagnosis.
-pub const CATALOGUE: [Effect; 5] = [
+pub const CATALOGUE: [Effect; 7] = [
     specimen::EFFECT,
     foundation::EFFECT,
     stick_slip::EFFECT,
     flow_saturation::EFFECT,
     valve_deadband::EFFECT,
+    friction_asymmetry::EFFECT,
+    flow_asymmetry::EFFECT,
 ];
 
 /// The effect named `name`.

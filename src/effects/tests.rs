@@ -20,7 +20,9 @@ fn names_keys_and_value_references_are_unique() {
             "foundation",
             "stick_slip",
             "flow_saturation",
-            "valve_deadband"
+            "valve_deadband",
+            "friction_asymmetry",
+            "flow_asymmetry"
         ]
     );
     let mut vrs: Vec<u32> = CATALOGUE.iter().map(|e| e.switch.value_reference).collect();

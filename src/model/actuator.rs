@@ -36,6 +36,8 @@ pub struct Hydraulics {
     pub max_flow: Option<f64>,
     /// Deadband d, 0 when off.
     pub deadband: f64,
+    /// Flow factors for a positive and a negative spool (`flow_asymmetry`; 1 when off).
+    pub direction: (f64, f64),
 }
 
 impl Hydraulics {
@@ -53,6 +55,7 @@ impl Hydraulics {
             orifice: a.flow_gain_m3_s / signed_root(a.supply_pressure_pa / 2.0),
             max_flow: p.flow_saturation.max_flow(),
             deadband: p.valve_deadband.band(),
+            direction: p.flow_asymmetry.factors(),
         }
     }
 
@@ -73,14 +76,19 @@ impl Hydraulics {
     #[inline]
     pub fn valve_flows(&self, xv: f64, pa: f64, pb: f64) -> (f64, f64) {
         let opening = self.metering_opening(xv);
+        let side = if opening >= 0.0 {
+            self.direction.0
+        } else {
+            self.direction.1
+        };
         match self.model {
             ActuatorModel::Ideal => {
-                let q = self.flow_gain * opening;
+                let q = self.flow_gain * opening * side;
                 (q, q)
             }
             ActuatorModel::Nonlinear => {
                 let s = opening.clamp(-1.0, 1.0); // spool clip
-                let kv = self.orifice;
+                let kv = self.orifice * side;
                 if s >= 0.0 {
                     (
                         kv * s * signed_root(self.supply_pa - pa),

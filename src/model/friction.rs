@@ -13,6 +13,8 @@ pub struct BoucWen {
     pub inv_yield: f64,
     /// The stick-slip Stribeck term (zero when the effect is off).
     pub stribeck: Stribeck,
+    /// Amplitude factors while `Z > 0` and `Z <= 0` (`friction_asymmetry`; 1 when off).
+    pub direction: (f64, f64),
 }
 
 impl BoucWen {
@@ -23,13 +25,25 @@ impl BoucWen {
             shape: f.shape,
             inv_yield: 1.0 / f.yield_displacement_m,
             stribeck: s.stribeck(),
+            direction: (1.0, 1.0),
         }
+    }
+
+    /// With the direction factors of `friction_asymmetry` (spec section 7).
+    pub fn with_direction(mut self, a: &crate::params::FrictionAsymmetry) -> Self {
+        self.direction = a.factors();
+        self
     }
 
     /// Dissipative force `F_D = F_mu(v) Z` (eq. 4.14; stick-slip amplitude of spec section 7).
     #[inline]
     pub fn force(&self, z: f64, v: f64) -> f64 {
-        self.stribeck.amplitude(self.force_n, v) * z
+        let side = if z > 0.0 {
+            self.direction.0
+        } else {
+            self.direction.1
+        };
+        self.stribeck.amplitude(self.force_n, v) * z * side
     }
 
     /// `Z' = (1 - Z^2 (b + (1 - b) sign(Z v))) v / Y` (eq. 4.15).

@@ -118,7 +118,8 @@ impl Model {
             valve: SpoolDynamics::new(&p.servovalve),
             hydraulics: Hydraulics::new(p),
             payload: Payload::new(&p.table),
-            friction: BoucWen::new(&p.friction, &p.stick_slip),
+            friction: BoucWen::new(&p.friction, &p.stick_slip)
+                .with_direction(&p.friction_asymmetry),
             specimen: p.specimen.oscillator(),
             foundation: p.foundation.oscillator(),
         }

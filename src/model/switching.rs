@@ -15,7 +15,7 @@ pub const SWITCHES: [&str; SWITCH_COUNT] = [
     "Bouc-Wen friction variable Z (the sign of Z v in eq. 4.15)",
     "1 - command before the clip (upper clip edge)",
     "command before the clip + 1 (lower clip edge)",
-    "metering spool opening (nonlinear actuator: the orifice flows change chambers)",
+    "metering spool opening (nonlinear actuator: the orifice flows change chambers; flow asymmetry)",
     "1 - |metering spool opening| (nonlinear actuator: spool clip at full opening)",
     "|spool| - deadband (valve deadband edges)",
     "maximum flow - |flow into chamber A| (flow saturation)",
@@ -40,7 +40,11 @@ impl Model {
             s[ix::Z],
             1.0 - alg.command_before_clip,
             alg.command_before_clip + 1.0,
-            if nonlinear { opening } else { ABSENT },
+            if nonlinear || h.direction.0 != h.direction.1 {
+                opening
+            } else {
+                ABSENT
+            },
             if nonlinear {
                 1.0 - opening.abs()
             } else {
