@@ -24,100 +24,73 @@ pub const EFFECTS: [Effect; 5] = [
 ];
 
 impl Effect {
-    pub fn name(self) -> &'static str {
-        match self {
-            Effect::Specimen => "specimen",
-            Effect::Foundation => "foundation",
-            Effect::StickSlip => "stick_slip",
-            Effect::FlowSaturation => "flow_saturation",
-            Effect::ValveDeadband => "valve_deadband",
-        }
+    /// The catalogue entry of this effect ([`crate::effects::CATALOGUE`], the one place
+    /// its parameters, FMU variables, fitting ranges and signature tests are declared).
+    pub fn catalogue(self) -> &'static crate::effects::Effect {
+        // the diagnosis fits the catalogue's first five effects, in its order
+        &crate::effects::CATALOGUE[self as usize]
     }
 
-    /// Parameter names (spec section 7).
-    pub fn parameters(self) -> &'static [&'static str] {
-        match self {
-            Effect::Specimen | Effect::Foundation => &["mass_kg", "frequency_hz", "damping_ratio"],
-            Effect::StickSlip => &["static_ratio", "stribeck_velocity_m_s"],
-            Effect::FlowSaturation => &["max_flow_m3_s"],
-            Effect::ValveDeadband => &["deadband"],
-        }
+    pub fn name(self) -> &'static str {
+        self.catalogue().name
+    }
+
+    /// Parameter names (spec section 7), in declaration order.
+    pub fn parameters(self) -> Vec<&'static str> {
+        self.catalogue().parameters.iter().map(|q| q.key).collect()
     }
 
     /// The fitting tests where its signature lives.
     pub(super) fn signature_tests(self) -> &'static [&'static str] {
-        match self {
-            Effect::Specimen => &["R2", "R3"],
-            // the broadest random test shows a stiff foundation's mode, the largest
-            // forces its deflection in the LVDT
-            Effect::Foundation => &["R1", "R3", "S9"],
-            // the slow sines creep through the Stribeck range twice a cycle
-            Effect::StickSlip => &["S1", "S2", "S4", "S5", "S7", "S8", "T1", "T3"],
-            Effect::FlowSaturation => &["S9", "S6", "R2"],
-            Effect::ValveDeadband => &["R2", "T1", "T3", "S1"],
-        }
+        self.catalogue().signature_tests
     }
 
     /// The effect's parameters in `p` (the inverse of [`Effect::apply`]).
     pub(super) fn read(self, p: &Params) -> Vec<f64> {
-        match self {
-            Effect::Specimen => vec![
-                p.specimen.mass_kg,
-                p.specimen.frequency_hz,
-                p.specimen.damping_ratio,
-            ],
-            Effect::Foundation => vec![
-                p.foundation.mass_kg,
-                p.foundation.frequency_hz,
-                p.foundation.damping_ratio,
-            ],
-            Effect::StickSlip => vec![
-                p.stick_slip.static_ratio,
-                p.stick_slip.stribeck_velocity_m_s,
-            ],
-            Effect::FlowSaturation => vec![p.flow_saturation.max_flow_m3_s],
-            Effect::ValveDeadband => vec![p.valve_deadband.deadband],
-        }
+        self.catalogue()
+            .parameters
+            .iter()
+            .map(|q| (q.read)(p))
+            .collect()
     }
 
     /// Switch the effect on in `p` with its parameters `theta`.
     pub(super) fn apply(self, p: &mut Params, theta: &[f64]) {
-        match self {
-            Effect::Specimen => {
-                p.specimen.enabled = true;
-                p.specimen.mass_kg = theta[0];
-                p.specimen.frequency_hz = theta[1];
-                p.specimen.damping_ratio = theta[2];
-            }
-            Effect::Foundation => {
-                p.foundation.enabled = true;
-                p.foundation.mass_kg = theta[0];
-                p.foundation.frequency_hz = theta[1];
-                p.foundation.damping_ratio = theta[2];
-            }
-            Effect::StickSlip => {
-                p.stick_slip.enabled = true;
-                p.stick_slip.static_ratio = theta[0];
-                p.stick_slip.stribeck_velocity_m_s = theta[1];
-            }
-            Effect::FlowSaturation => {
-                p.flow_saturation.enabled = true;
-                p.flow_saturation.max_flow_m3_s = theta[0];
-            }
-            Effect::ValveDeadband => {
-                p.valve_deadband.enabled = true;
-                p.valve_deadband.deadband = theta[0];
-            }
+        let e = self.catalogue();
+        e.set_enabled(p, true);
+        for (q, &x) in e.parameters.iter().zip(theta) {
+            (q.write)(p, x);
         }
     }
 
+    /// The fitting bounds, lower and upper, one per parameter.
     pub(super) fn bounds(self) -> (Vec<f64>, Vec<f64>) {
-        match self {
-            Effect::Specimen => (vec![200.0, 0.5, 0.002], vec![2e5, 60.0, 0.5]),
-            Effect::Foundation => (vec![1e4, 2.0, 0.002], vec![1e8, 100.0, 0.5]),
-            Effect::StickSlip => (vec![1.0, 1e-4], vec![6.0, 0.05]),
-            Effect::FlowSaturation => (vec![1e-4], vec![1.0]),
-            Effect::ValveDeadband => (vec![0.0], vec![0.2]),
+        let ranges = self.catalogue().fit_bounds(&Params::trees_lab());
+        (
+            ranges.iter().map(|r| r.lower).collect(),
+            ranges.iter().map(|r| r.upper).collect(),
+        )
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// Each diagnosis effect is the catalogue entry of its name (the enum's order is the
+    /// catalogue's).
+    #[test]
+    fn every_effect_is_its_catalogue_entry() {
+        for e in EFFECTS {
+            // the variant's own name (its JSON form) is its catalogue entry's
+            let variant = serde_json::to_string(&e).unwrap();
+            assert_eq!(variant, format!("\"{}\"", e.catalogue().name));
+            let entry = crate::effects::by_name(e.name()).unwrap();
+            let mut p = Params::trees_lab();
+            let theta: Vec<f64> = e.read(&p).iter().map(|x| x * 1.1 + 0.001).collect();
+            e.apply(&mut p, &theta);
+            assert!(entry.is_enabled(&p));
+            assert_eq!(e.read(&p), theta);
         }
     }
 }
