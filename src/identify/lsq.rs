@@ -40,6 +40,8 @@ pub struct LsqFit {
     pub residuals: usize,
     /// One-sigma uncertainty of each parameter from `s^2 (J^T J)^-1`, NaN when singular.
     pub sigma: Vec<f64>,
+    /// `s^2 (J^T J)^-1`, `None` when singular.
+    pub covariance: Option<DMatrix<f64>>,
     pub iterations: usize,
 }
 
@@ -186,8 +188,9 @@ fn finish(theta: Vec<f64>, cost: f64, m: usize, jm: &DMatrix<f64>, iterations: u
     let dof = (m as f64 - n as f64).max(1.0);
     let s2 = cost / dof;
     let jtj = jm.transpose() * jm;
-    let sigma = match jtj.try_inverse() {
-        Some(inv) => (0..n).map(|i| (s2 * inv[(i, i)]).max(0.0).sqrt()).collect(),
+    let covariance = jtj.try_inverse().map(|inv| inv * s2);
+    let sigma = match &covariance {
+        Some(cov) => (0..n).map(|i| cov[(i, i)].max(0.0).sqrt()).collect(),
         None => vec![f64::NAN; n],
     };
     LsqFit {
@@ -195,6 +198,7 @@ fn finish(theta: Vec<f64>, cost: f64, m: usize, jm: &DMatrix<f64>, iterations: u
         cost,
         residuals: m,
         sigma,
+        covariance,
         iterations,
     }
 }

@@ -14,6 +14,7 @@ mod error;
 mod estimates;
 pub mod frf;
 mod friction;
+pub mod greybox;
 pub mod lsq;
 mod mass;
 mod oil_column;
@@ -278,6 +279,22 @@ pub fn identify_screened(s: &Screening) -> Identification {
             p.actuator.model = ActuatorModel::Nonlinear;
         }
     }
+    let known = greybox::Known {
+        servovalve: valve.is_some(),
+        mass: mass_kg.is_some(),
+        oil_column: oil.is_some(),
+        friction: friction.is_some(),
+    };
+    let closed_loop = closed_loop(c, &p, known, &unknown_inputs).and_then(|r| {
+        r.map_err(|e| note(Err(e))).ok()
+    });
+    if let Some(cl) = &closed_loop {
+        p = cl.params;
+    }
+    let comparison = match &closed_loop {
+        Some(cl) => cl.fits.clone(),
+        None => compare_all(c, &p),
+    };
     let welch = WelchOptions::for_resolution(fs, RESOLUTION_HZ);
     Identification {
         campaign: c.info.name.clone(),
@@ -294,7 +311,49 @@ pub fn identify_screened(s: &Screening) -> Identification {
         screening: s.findings.clone(),
         welch,
         unknown_inputs,
+        closed_loop,
+        comparison,
     }
+}
+
+/// Tests that can take part in a closed-loop fit: a measured displacement or acceleration.
+fn motion_tests(c: &Campaign) -> Vec<usize> {
+    (0..c.records.len())
+        .filter(|&i| {
+            let r = &c.records[i];
+            r.displacement_m.is_some() || r.acceleration_m_s2.is_some()
+        })
+        .collect()
+}
+
+/// The grey-box fit of the closed loop when something the simulation needs is neither
+/// given nor identified (`None` when the section-4 chain gave everything).
+fn closed_loop(
+    c: &Campaign,
+    p: &Params,
+    known: greybox::Known,
+    unknown_inputs: &[&'static str],
+) -> Option<Result<greybox::ClosedLoopFit, IdentifyError>> {
+    let complete = known.servovalve && known.mass && known.oil_column && known.friction;
+    let gains_known = !unknown_inputs.iter().any(|k| k.starts_with("controller."));
+    if complete && gains_known {
+        return None;
+    }
+    Some(greybox::fit_closed_loop(c, &motion_tests(c), p, known))
+}
+
+/// The identified model against every test with a measured motion (the section-4
+/// estimators chose their tests; these figures are the whole campaign's, marked as
+/// estimation data).
+fn compare_all(c: &Campaign, p: &Params) -> Vec<greybox::ChannelFit> {
+    if c.gains_known().is_err() {
+        return Vec::new();
+    }
+    let tests: Vec<(usize, greybox::Role)> = motion_tests(c)
+        .into_iter()
+        .map(|i| (i, greybox::Role::Estimation))
+        .collect();
+    greybox::compare::compare(p, c, &tests, &greybox::compare::COMPARED).0
 }
 
 /// The final mass: inverse-variance mean of the random and periodic estimates, `None`
@@ -345,6 +404,8 @@ impl Identification {
             }
         }
         out["uncertainty"] = Value::Object(unc);
+        out["closed_loop"] = serde_json::to_value(&self.closed_loop).unwrap_or(Value::Null);
+        out["comparison"] = serde_json::to_value(&self.comparison).unwrap_or(Value::Null);
         out
     }
 
@@ -400,6 +461,12 @@ impl Identification {
             &["actuator.bulk_modulus_pa", "actuator.leakage_m3_s_pa"],
             "oil column not identified (see missing)",
         );
+        if let Some(cl) = &self.closed_loop {
+            let fitted = |k: &str| cl.estimates.iter().any(|e| e.key == k);
+            let held = |k: &str| cl.conventions.iter().any(|e| e.key == k);
+            d.retain(|(k, _)| !fitted(k) && !held(k));
+            d.extend(cl.conventions.iter().map(|c| (c.key, c.reason)));
+        }
         d
     }
 

@@ -179,4 +179,9 @@ pub struct Identification {
     /// defaults in `params` and listed by [`Identification::defaults`]).
     #[serde(skip)]
     pub unknown_inputs: Vec<&'static str>,
+    /// The grey-box output-error fit of the closed loop, when the campaign left gains,
+    /// geometry or section-4 estimates unknown (issue 16, part 3).
+    pub closed_loop: Option<super::greybox::ClosedLoopFit>,
+    /// Per test and channel, the identified model's simulation against the measurement.
+    pub comparison: Vec<super::greybox::ChannelFit>,
 }

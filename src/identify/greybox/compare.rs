@@ -1,0 +1,190 @@
+//! Measured against simulated (issue 16, part 3): each test simulated as it was run (its
+//! reference, its controller override), and per test and motion channel the NRMSE and
+//! the fit % as MATLAB's `compare` prints it.
+//!
+//! Both figures are taken after removing each signal's mean: an LVDT's zero and an
+//! accelerometer's bias are the sensors', not the table's, and the model starts at rest
+//! at the reference's first value. Then `NRMSE = RMS(measured - simulated) / RMS(measured)`
+//! and `fit % = 100 (1 - NRMSE)`.
+
+use crate::campaign::{Campaign, Measured};
+use crate::model::{Inputs, Outputs};
+use crate::params::Params;
+use crate::solver::{simulate_run_with, Checks, DEFAULT_MAX_SUBSTEP_S};
+use crate::Model;
+use rayon::prelude::*;
+use serde::Serialize;
+
+/// The channels an output-error fit compares: the table's motion and, where recorded,
+/// the actuator force.
+pub const COMPARED: [Measured; 3] = [Measured::Displacement, Measured::Acceleration, Measured::Force];
+
+/// What a test was used for in the fit whose figures are reported.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize)]
+#[serde(rename_all = "snake_case")]
+pub enum Role {
+    /// Fitted on: its figures are not a prediction.
+    Estimation,
+    /// Not used by the fit: its figures are a prediction.
+    Validation,
+}
+
+/// The fit of one channel of one test.
+#[derive(Debug, Clone, Serialize)]
+pub struct ChannelFit {
+    pub test: String,
+    pub channel: &'static str,
+    pub role: Role,
+    /// `RMS(measured - simulated) / RMS(measured)`, means removed.
+    pub nrmse: f64,
+    /// `100 (1 - NRMSE)`, as MATLAB's `compare`.
+    pub fit_percent: f64,
+    /// RMS of the measured channel (mean removed), in its SI unit.
+    pub measured_rms: f64,
+}
+
+/// Test `i` simulated with `p` as it was run: the test's controller override applied to
+/// `p`'s gains, the table starting at rest at the reference's first displacement.
+/// `Err` with the time and reason when the run left the envelope.
+pub fn simulate_as_run(p: &Params, c: &Campaign, i: usize) -> Result<Vec<Outputs>, String> {
+    simulate_prefix(p, c, i, c.records[i].len(), Checks::Envelope)
+}
+
+/// [`simulate_as_run`] over the first `samples` samples only, stopping on `checks` (the
+/// fit's trial models may pass the envelope on their way to the data, as the
+/// diagnosis' do; what is reported is held to it).
+pub fn simulate_prefix(
+    p: &Params,
+    c: &Campaign,
+    i: usize,
+    samples: usize,
+    checks: Checks,
+) -> Result<Vec<Outputs>, String> {
+    let spec = &c.info.tests[i];
+    let rec = &c.records[i];
+    let mut q = *p;
+    q.controller = spec.controller.apply(&p.controller);
+    let r0 = rec.ref_displacement_m.first().copied().unwrap_or(0.0);
+    let inputs: Vec<Inputs> = rec
+        .inputs()
+        .into_iter()
+        .take(samples)
+        .map(|mut u| {
+            u.reference.displacement_m -= r0;
+            u
+        })
+        .collect();
+    let run = simulate_run_with(
+        &Model::new(&q),
+        &inputs,
+        c.info.sample_rate_hz,
+        None,
+        DEFAULT_MAX_SUBSTEP_S,
+        checks,
+    );
+    if let Some(stop) = run.stop {
+        return Err(format!(
+            "{}: the simulation stopped at {:.3} s: {}",
+            spec.name, stop.time_s, stop.reason
+        ));
+    }
+    let mut out = run.outputs;
+    for o in &mut out {
+        o.displacement_m += r0;
+    }
+    Ok(out)
+}
+
+/// The simulated counterpart of measured channel `m`.
+pub fn simulated(o: &Outputs, m: Measured) -> f64 {
+    match m {
+        Measured::Displacement => o.displacement_m,
+        Measured::Acceleration => o.acceleration_m_s2,
+        Measured::Force => o.actuator_force_n,
+        Measured::ValveCommand => o.valve_command,
+        Measured::Spool => o.spool_position,
+    }
+}
+
+fn mean(x: &[f64]) -> f64 {
+    x.iter().sum::<f64>() / x.len().max(1) as f64
+}
+
+/// NRMSE of `sim` against `meas`, means removed; `None` for a flat or empty channel.
+pub fn nrmse(meas: &[f64], sim: &[f64]) -> Option<(f64, f64)> {
+    let (mm, ms) = (mean(meas), mean(sim));
+    let n = meas.len().min(sim.len());
+    let mut e2 = 0.0;
+    let mut y2 = 0.0;
+    for k in 0..n {
+        let y = meas[k] - mm;
+        e2 += (y - (sim[k] - ms)).powi(2);
+        y2 += y * y;
+    }
+    let rms = (y2 / n.max(1) as f64).sqrt();
+    (n > 0 && y2 > 0.0 && e2.is_finite()).then(|| ((e2 / y2).sqrt(), rms))
+}
+
+/// Per test of `tests` (with its role) and channel of `channels` it recorded: the fit of
+/// `p`. A test whose simulation stopped is reported in `Err` with the reason.
+pub fn compare(
+    p: &Params,
+    c: &Campaign,
+    tests: &[(usize, Role)],
+    channels: &[Measured],
+) -> (Vec<ChannelFit>, Vec<String>) {
+    let runs: Vec<(usize, Role, Result<Vec<Outputs>, String>)> = tests
+        .par_iter()
+        .map(|&(i, role)| (i, role, simulate_as_run(p, c, i)))
+        .collect();
+    let mut fits = Vec::new();
+    let mut stopped = Vec::new();
+    for (i, role, run) in runs {
+        let sim = match run {
+            Ok(s) => s,
+            Err(e) => {
+                stopped.push(e);
+                continue;
+            }
+        };
+        for &m in channels {
+            let Some(meas) = c.records[i].measured(m) else {
+                continue;
+            };
+            let s: Vec<f64> = sim.iter().map(|o| simulated(o, m)).collect();
+            if let Some((e, rms)) = nrmse(meas, &s) {
+                fits.push(ChannelFit {
+                    test: c.info.tests[i].name.clone(),
+                    channel: m.name(),
+                    role,
+                    nrmse: e,
+                    fit_percent: 100.0 * (1.0 - e),
+                    measured_rms: rms,
+                });
+            }
+        }
+    }
+    (fits, stopped)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn nrmse_is_zero_for_a_perfect_model_and_one_for_a_silent_one() {
+        let y: Vec<f64> = (0..100).map(|k| (k as f64 * 0.3).sin() + 5.0).collect();
+        let (e, rms) = nrmse(&y, &y).unwrap();
+        assert!(e < 1e-12);
+        assert!((rms - 0.7071).abs() < 0.02, "{rms}");
+        // an offset alone is not an error (the sensor's zero)
+        let shifted: Vec<f64> = y.iter().map(|v| v - 3.0).collect();
+        assert!(nrmse(&y, &shifted).unwrap().0 < 1e-12);
+        let flat = vec![1.0; 100];
+        assert!((nrmse(&y, &flat).unwrap().0 - 1.0).abs() < 1e-12);
+        // half the amplitude: NRMSE 0.5, fit 50 %
+        let half: Vec<f64> = y.iter().map(|v| 0.5 * (v - 5.0)).collect();
+        assert!((nrmse(&y, &half).unwrap().0 - 0.5).abs() < 1e-3);
+        assert!(nrmse(&flat, &y).is_none(), "a flat measured channel has no NRMSE");
+    }
+}

@@ -1,0 +1,377 @@
+//! Grey-box identification of the closed loop by output error (issue 16, part 3), as
+//! MATLAB's `nlgreyest` does: the measured reference drives the project's own model
+//! (spec sections 2-5, the same simulator as everywhere), and the parameters nobody
+//! wrote down and no section-4 estimator could give are fitted so that the simulated
+//! displacement, acceleration and (where recorded) force follow the measured ones.
+//!
+//! - What is freed and what is held by convention: [`structure`].
+//! - Starts read off the measured response: [`start`]; several oil-column starts when no
+//!   resonance shows, each refined on the first [`EXCERPT_S`] of the tests, the best
+//!   refined on everything.
+//! - Estimation and validation tests: [`split`]; the figures of a test the fit did not
+//!   see are predictions ([`compare`]).
+//! - The uncertainty: the Levenberg-Marquardt covariance, widened for the residuals'
+//!   correlation; the combinations the motion determines and the pairs it cannot
+//!   separate: [`combinations`].
+
+mod combinations;
+pub mod compare;
+mod parameters;
+mod split;
+mod start;
+mod structure;
+
+pub use combinations::{Combination, INSEPARABLE_CORRELATION};
+pub use compare::{ChannelFit, Role};
+pub use parameters::GreyParameter;
+pub use structure::{Convention, Known};
+
+use super::error::IdentifyError;
+use super::lsq::{minimise, LsqFit, LsqOptions};
+use crate::campaign::{Campaign, Measured};
+use crate::params::Params;
+use crate::solver::Checks;
+use compare::{simulate_prefix, simulated, COMPARED};
+use parameters::with_search;
+use rayon::prelude::*;
+use serde::Serialize;
+use structure::Structure;
+
+/// Seconds of each estimation test the starts are compared on: several loop time
+/// constants and many cycles of any oil column, at a fraction of the full fit's cost.
+pub const EXCERPT_S: f64 = 20.0;
+/// Iterations of each start's refinement on the excerpt.
+const START_ITERATIONS: usize = 12;
+/// Iterations of the final fit.
+const FINAL_ITERATIONS: usize = 40;
+/// At most this many residual samples per test and channel: the residual is decimated
+/// (the simulation is not) so that the Jacobian of a week of recordings fits in memory;
+/// 50 000 samples still resolve every dynamic below the Nyquist frequency of 1 kHz data
+/// over 50 s, and longer records are sampled evenly.
+const MAX_RESIDUALS_PER_CHANNEL: usize = 50_000;
+/// Relative cost decrease below which the fit stops.
+const TOLERANCE: f64 = 1e-7;
+/// Lags over which the residual's autocorrelation is summed for the covariance's
+/// widening (beyond them a fitted loop's residual has decorrelated).
+const MAX_CORRELATION_LAG: usize = 2000;
+
+/// A freed parameter's estimate.
+#[derive(Debug, Clone, Serialize)]
+pub struct FreeEstimate {
+    pub key: &'static str,
+    pub value: f64,
+    /// One sigma, widened for the residuals' correlation; `None` when the covariance is
+    /// singular (the parameter is not determined).
+    pub sigma: Option<f64>,
+    /// The estimate sits on a bound of its search range: not an estimate of the table.
+    pub at_bound: bool,
+}
+
+/// The closed-loop fit.
+#[derive(Debug, Clone, Serialize)]
+pub struct ClosedLoopFit {
+    pub estimation_tests: Vec<String>,
+    pub validation_tests: Vec<String>,
+    pub channels: Vec<&'static str>,
+    pub estimates: Vec<FreeEstimate>,
+    pub conventions: Vec<Convention>,
+    pub combinations: Vec<Combination>,
+    pub inseparable: Vec<String>,
+    /// Per test and channel, the fitted model against the measurement.
+    pub fits: Vec<ChannelFit>,
+    /// Tests whose simulation stopped (the envelope), with why.
+    pub stopped: Vec<String>,
+    pub starts_tried: usize,
+    pub iterations: usize,
+    /// Factor by which the residuals' correlation widened the covariance.
+    pub correlation_factor: f64,
+    #[serde(skip)]
+    pub params: Params,
+}
+
+/// One measured channel of one estimation test, prepared for the residual.
+struct Target {
+    test: usize,
+    channel: Measured,
+    /// Mean-removed measured samples at the kept indices.
+    measured: Vec<f64>,
+    stride: usize,
+    /// Samples simulated (the whole test or its excerpt).
+    samples: usize,
+    weight: f64,
+}
+
+/// Fit the closed loop of `c` on its usable `tests` (those with a reference and the
+/// displacement or acceleration), from `p` (the campaign's keys and the section-4
+/// estimates applied) with what `known` says is already identified.
+pub fn fit_closed_loop(
+    c: &Campaign,
+    tests: &[usize],
+    p: &Params,
+    known: Known,
+) -> Result<ClosedLoopFit, IdentifyError> {
+    let (estimation, validation) = split::split(c, tests);
+    if estimation.is_empty() {
+        return Err(IdentifyError::not_usable(
+            "closed loop not identified: no test recorded a reference and the displacement or the acceleration",
+        ));
+    }
+    let mut p0 = *p;
+    let s = structure::choose(&mut p0, c, &estimation, known);
+    if s.free.is_empty() {
+        return Err(IdentifyError::not_usable(
+            "closed loop: every parameter is known or identified, nothing to fit",
+        ));
+    }
+    let excerpt = targets(c, &estimation, &s, Some(EXCERPT_S));
+    let starts = starting_points(&p0, c, &estimation, &s);
+    let mut best: Option<(Params, f64)> = None;
+    for q in &starts {
+        if let Some(f) = run_lsq(q, c, &excerpt, &s.free, START_ITERATIONS) {
+            let fitted = with_search(q, &s.free, &f.theta);
+            if best.as_ref().is_none_or(|(_, cost)| f.cost < *cost) {
+                best = Some((fitted, f.cost));
+            }
+        }
+    }
+    let (q, _) = best.ok_or_else(|| {
+        IdentifyError::not_usable(format!(
+            "closed loop not identified: no start ({}) could be simulated; the first: {}",
+            starts.len(),
+            why_not(&starts[0], c, &estimation)
+        ))
+    })?;
+    let full = targets(c, &estimation, &s, None);
+    let fit = run_lsq(&q, c, &full, &s.free, FINAL_ITERATIONS).ok_or_else(|| {
+        IdentifyError::not_usable("closed loop not identified: the fit's simulation left the operating envelope")
+    })?;
+    Ok(finish(c, &s, &q, &fit, &full, estimation, validation, starts.len()))
+}
+
+/// Assemble the result from the final fit.
+#[allow(clippy::too_many_arguments)]
+fn finish(
+    c: &Campaign,
+    s: &Structure,
+    from: &Params,
+    fit: &LsqFit,
+    targets: &[Target],
+    estimation: Vec<usize>,
+    validation: Vec<usize>,
+    starts_tried: usize,
+) -> ClosedLoopFit {
+    let params = with_search(from, &s.free, &fit.theta);
+    let factor = residuals(&params, c, targets)
+        .map(|r| correlation_factor(&r))
+        .unwrap_or(1.0);
+    let cov = fit.covariance.as_ref().map(|m| m * factor);
+    let estimates = s
+        .free
+        .iter()
+        .enumerate()
+        .map(|(j, g)| {
+            let value = g.get(&params);
+            let [lo, hi] = g.bounds(&params);
+            let tol = 1e-6 * (hi - lo).abs().min(value.abs().max(1e-300));
+            FreeEstimate {
+                key: g.key(),
+                value,
+                sigma: cov.as_ref().and_then(|m| {
+                    let sd = m[(j, j)].sqrt();
+                    let sd = if g.logarithmic() { sd * value } else { sd };
+                    sd.is_finite().then_some(sd)
+                }),
+                at_bound: (value - lo).abs() <= tol || (hi - value).abs() <= tol,
+            }
+        })
+        .collect();
+    let roles: Vec<(usize, Role)> = estimation
+        .iter()
+        .map(|&i| (i, Role::Estimation))
+        .chain(validation.iter().map(|&i| (i, Role::Validation)))
+        .collect();
+    let channels: Vec<Measured> = COMPARED
+        .into_iter()
+        .filter(|&m| m != Measured::Force || s.with_force)
+        .collect();
+    let (fits, stopped) = compare::compare(&params, c, &roles, &channels);
+    let name = |i: &usize| c.info.tests[*i].name.clone();
+    ClosedLoopFit {
+        estimation_tests: estimation.iter().map(name).collect(),
+        validation_tests: validation.iter().map(name).collect(),
+        channels: channels.iter().map(|m| m.name()).collect(),
+        estimates,
+        conventions: s.conventions.clone(),
+        combinations: combinations::combinations(&params, &s.free, cov.as_ref()),
+        inseparable: cov
+            .as_ref()
+            .map(|m| combinations::inseparable(&s.free, m))
+            .unwrap_or_default(),
+        fits,
+        stopped,
+        starts_tried,
+        iterations: fit.iterations,
+        correlation_factor: factor,
+        params,
+    }
+}
+
+/// The starts: the loop gain and valve from the measured bandwidth, and one start per
+/// oil-column frequency of [`start::oil_column_starts`] when the oil column is free.
+fn starting_points(p: &Params, c: &Campaign, estimation: &[usize], s: &Structure) -> Vec<Params> {
+    use GreyParameter::*;
+    let Some(reading) = estimation.iter().find_map(|&i| start::read_loop(c, i)) else {
+        return vec![*p];
+    };
+    let what = start::LoopStart {
+        through_kp: s.free.contains(&DisplacementGain),
+        feed_forward: s.free.contains(&VelocityFeedForward),
+        valve: s.free.contains(&ValveTimeConstant),
+    };
+    let loop_free = what.through_kp || s.free.contains(&FlowGain);
+    let base = if loop_free { start::with_loop(p, &reading, what) } else { *p };
+    if !s.free.contains(&BulkModulus) {
+        return vec![base];
+    }
+    start::oil_column_starts(&reading, c.info.sample_rate_hz)
+        .into_iter()
+        .map(|f| start::stable_oil_column(&base, f))
+        .collect()
+}
+
+/// The residual targets of the estimation tests: every compared channel they recorded
+/// (the force only when the structure uses it), over `excerpt_s` seconds or the whole.
+fn targets(c: &Campaign, tests: &[usize], s: &Structure, excerpt_s: Option<f64>) -> Vec<Target> {
+    let fs = c.info.sample_rate_hz;
+    let mut out = Vec::new();
+    for &i in tests {
+        let rec = &c.records[i];
+        let samples = excerpt_s.map_or(rec.len(), |t| ((t * fs) as usize).clamp(2, rec.len()));
+        for m in COMPARED {
+            if m == Measured::Force && !s.with_force {
+                continue;
+            }
+            let Some(y) = rec.measured(m) else { continue };
+            let y = &y[..samples];
+            let mean = y.iter().sum::<f64>() / samples as f64;
+            let rms = (y.iter().map(|v| (v - mean).powi(2)).sum::<f64>() / samples as f64).sqrt();
+            if !(rms > 0.0) {
+                continue;
+            }
+            let stride = samples.div_ceil(MAX_RESIDUALS_PER_CHANNEL).max(1);
+            let measured: Vec<f64> = y.iter().step_by(stride).map(|v| v - mean).collect();
+            let weight = 1.0 / (rms * (measured.len() as f64).sqrt());
+            out.push(Target { test: i, channel: m, measured, stride, samples, weight });
+        }
+    }
+    out
+}
+
+/// The weighted residual of `p` on `targets` (per test and channel, its squared sum is
+/// that channel's NRMSE squared); `None` when `p` breaks a parameter rule or a run left
+/// the envelope.
+fn residuals(p: &Params, c: &Campaign, targets: &[Target]) -> Option<Vec<f64>> {
+    p.validate().ok()?;
+    let mut tests: Vec<(usize, usize)> = targets.iter().map(|t| (t.test, t.samples)).collect();
+    tests.dedup();
+    let runs: Vec<(usize, Vec<crate::model::Outputs>)> = tests
+        .par_iter()
+        .map(|&(i, n)| simulate_prefix(p, c, i, n, Checks::DivergenceOnly).ok().map(|o| (i, o)))
+        .collect::<Option<_>>()?;
+    let mut r = Vec::new();
+    for t in targets {
+        let sim = &runs.iter().find(|(i, _)| *i == t.test)?.1;
+        let mean = sim.iter().map(|o| simulated(o, t.channel)).sum::<f64>() / sim.len() as f64;
+        let kept = sim.iter().step_by(t.stride);
+        r.extend(
+            kept.zip(&t.measured)
+                .map(|(o, y)| (simulated(o, t.channel) - mean - y) * t.weight),
+        );
+    }
+    r.iter().all(|v| v.is_finite()).then_some(r)
+}
+
+/// Why `p` cannot be simulated on `tests`: the parameter rule it breaks or the first run
+/// that left the envelope.
+fn why_not(p: &Params, c: &Campaign, tests: &[usize]) -> String {
+    if let Err(e) = p.validate() {
+        return e.to_string();
+    }
+    tests
+        .iter()
+        .find_map(|&i| compare::simulate_as_run(p, c, i).err())
+        .unwrap_or_else(|| "a residual was not finite".to_string())
+}
+
+/// Levenberg-Marquardt on the search coordinates of `free`, from `p`.
+fn run_lsq(
+    p: &Params,
+    c: &Campaign,
+    targets: &[Target],
+    free: &[GreyParameter],
+    iterations: usize,
+) -> Option<LsqFit> {
+    let theta0: Vec<f64> = free.iter().map(|g| g.to_search(g.get(p))).collect();
+    let (lower, upper): (Vec<f64>, Vec<f64>) = free
+        .iter()
+        .map(|g| {
+            let [lo, hi] = g.bounds(p);
+            (g.to_search(lo), g.to_search(hi))
+        })
+        .unzip();
+    let scale: Vec<f64> = free.iter().map(|g| g.search_scale(p)).collect();
+    let opts = LsqOptions {
+        max_iterations: iterations,
+        tolerance: TOLERANCE,
+        step: 1e-4,
+        parallel: true,
+    };
+    minimise(
+        |theta| residuals(&with_search(p, free, theta), c, targets),
+        &theta0,
+        &lower,
+        &upper,
+        &scale,
+        opts,
+    )
+}
+
+/// `1 + 2 sum rho_k` over the residual's autocorrelation until it first falls below
+/// zero: the number of residual samples per independent one, by which `s^2 (J^T J)^-1`
+/// understates the covariance of a fit to correlated residuals.
+fn correlation_factor(r: &[f64]) -> f64 {
+    let n = r.len();
+    let r0: f64 = r.iter().map(|v| v * v).sum();
+    if n < 2 || r0 <= 0.0 {
+        return 1.0;
+    }
+    let mut sum = 0.0;
+    for lag in 1..MAX_CORRELATION_LAG.min(n - 1) {
+        let rho = r.iter().zip(&r[lag..]).map(|(a, b)| a * b).sum::<f64>() / r0;
+        if rho <= 0.0 {
+            break;
+        }
+        sum += rho;
+    }
+    1.0 + 2.0 * sum
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn white_residuals_are_not_widened_and_smooth_ones_are() {
+        use rand::{Rng, SeedableRng};
+        let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(3);
+        let white: Vec<f64> = (0..20_000).map(|_| rng.gen_range(-1.0..1.0)).collect();
+        let f = correlation_factor(&white);
+        assert!(f < 1.2, "{f}");
+        // a moving average over 10 samples: about 10 samples per independent one
+        let smooth: Vec<f64> = (0..white.len() - 10)
+            .map(|k| white[k..k + 10].iter().sum::<f64>())
+            .collect();
+        let f = correlation_factor(&smooth);
+        assert!((7.0..13.0).contains(&f), "{f}");
+    }
+}
