@@ -22,8 +22,14 @@ fn truth(variant: u64) -> Params {
     // no delta-P feedback: the oil column damped by a leaky piston alone. With the
     // delta-P feedback on, the fit does not yet recover the loop gain within 5 % (20 %
     // measured; issue 16 continues), so this suite does not claim it.
-    p.controller.kdp = 0.0;
-    p.actuator.leakage_m3_s_pa *= 4.0 + 2.0 * v;
+    if variant < 2 {
+        p.controller.kdp = 0.0;
+        p.actuator.leakage_m3_s_pa *= 4.0 + 2.0 * v;
+    } else {
+        p.controller.kp = 5.0;
+        p.table.mass_kg = 30_000.0;
+        p.actuator.bulk_modulus_pa = 1.4e9;
+    }
     p.servovalve.model = ServovalveModel::FirstOrder;
     p.servovalve.time_constant_s = 0.009 + 0.004 * v;
     p.table.mass_kg = 25_000.0 + 10_000.0 * v;
@@ -39,12 +45,15 @@ fn stripped_campaign(p: &Params, seed: u64) -> Campaign {
     let base = paper_program(30.0)[0].clone();
     let mut w1 = base.clone();
     w1.name = "W1".into();
-    w1.rms = Some(0.0015);
+    // the lightly damped oil column of a delta-P-fed table rings: a smaller level keeps
+    // its load within the supply pressure
+    let level = if p.controller.kdp > 0.0 { 0.4 } else { 1.0 };
+    w1.rms = Some(0.0015 * level);
     w1.band_hz = Some([0.3, 25.0]);
     w1.controller = ControllerOverride::default();
     let mut w2 = w1.clone();
     w2.name = "W2".into();
-    w2.rms = Some(0.002);
+    w2.rms = Some(0.002 * level);
     w2.band_hz = Some([0.3, 15.0]);
     let mut s1 = paper_program(30.0)[5].clone();
     assert_eq!(s1.kind, TestKind::Sine);
@@ -76,22 +85,36 @@ fn combination(id: &shaketable::identify::Identification, name: &str) -> (f64, f
     (c.value, c.sigma.unwrap_or(f64::NAN))
 }
 
+/// Relative tolerance of the valve bandwidth when the model's structure matches the table.
+const VALVE_TOLERANCE: f64 = 0.10;
+/// Relative tolerance of the oil-column frequency when the structure matches.
+const OIL_COLUMN_TOLERANCE: f64 = 0.05;
+
 #[test]
 fn the_motion_alone_gives_the_loop_the_valve_and_the_oil_column() {
-    recovers(0);
+    recovers(0, VALVE_TOLERANCE, OIL_COLUMN_TOLERANCE);
 }
 
-/// A table with a strong feed-forward (ratio 0.66), a slow valve (12 Hz) and a damped
-/// oil column at 16 Hz: the fit ends in a local minimum (loop gain 104 1/s for 19.8),
-/// because the start's low-band servo reading is bent by the valve's lag. Open work of
-/// issue 16; run with `--ignored` to see it.
+/// A strong feed-forward (ratio 0.66), a slow valve (12 Hz) and a damped oil column at
+/// 16 Hz: the low-band servo reading is bent by the valve's lag, and only the starts
+/// read at 45 degrees with a feed-forward lead the fit to the table.
 #[test]
-#[ignore = "issue 16: the closed-loop fit's start misleads it on this table"]
 fn a_strong_feed_forward_and_a_slow_valve() {
-    recovers(1);
+    recovers(1, VALVE_TOLERANCE, OIL_COLUMN_TOLERANCE);
 }
 
-fn recovers(variant: u64) {
+/// The delta-P feedback on, its gain unknown: the fit holds it at zero and carries its
+/// damping by the leakage (the structure's convention; freeing both sent the fit to a
+/// loop gain 2.3 times too high). The delta-P path through the valve then has no
+/// counterpart, and the valve and oil column become effective values: 12 % and 7 % off
+/// measured, so they are held to 20 % and 10 % here; the loop gain and feed-forward to
+/// the tolerances of a matching structure.
+#[test]
+fn a_delta_p_feedback_nobody_wrote_down() {
+    recovers(2, 0.20, 0.10);
+}
+
+fn recovers(variant: u64, valve_tolerance: f64, oil_tolerance: f64) {
     {
         let p = truth(variant);
         let c = stripped_campaign(&p, 11 + variant);
@@ -104,8 +127,8 @@ fn recovers(variant: u64) {
         for (name, want, tol) in [
             ("loop_gain_1_s", loop_gain, 0.05),
             ("feed_forward_ratio", ff, 0.10),
-            ("valve_bandwidth_hz", valve_hz, 0.10),
-            ("oil_column_frequency_hz", oil.frequency_hz, 0.05),
+            ("valve_bandwidth_hz", valve_hz, valve_tolerance),
+            ("oil_column_frequency_hz", oil.frequency_hz, oil_tolerance),
         ] {
             let (got, sigma) = combination(&id, name);
             eprintln!("variant {variant}: {name} {got:.4} (sigma {sigma:.2e}) for {want:.4}");

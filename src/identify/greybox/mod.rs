@@ -229,13 +229,17 @@ fn starting_points(p: &Params, c: &Campaign, estimation: &[usize], s: &Structure
         valve: s.free.contains(&ValveTimeConstant),
     };
     let loop_free = what.through_kp || s.free.contains(&FlowGain);
-    let base = if loop_free { start::with_loop(p, &reading, what) } else { *p };
+    let bases: Vec<Params> = match loop_free {
+        true => reading.loops.iter().map(|&l| start::with_loop(p, &reading, l, what)).collect(),
+        false => vec![*p],
+    };
     if !s.free.contains(&BulkModulus) {
-        return vec![base];
+        return bases;
     }
-    start::oil_column_starts(&reading, c.info.sample_rate_hz)
-        .into_iter()
-        .map(|f| start::stable_oil_column(&base, f))
+    let oil = start::oil_column_starts(&reading, c.info.sample_rate_hz);
+    bases
+        .iter()
+        .flat_map(|b| oil.iter().map(|&f| start::stable_oil_column(b, f)))
         .collect()
 }
 

@@ -34,20 +34,23 @@ const NYQUIST_FRACTION: f64 = 0.8;
 /// The low-frequency fit of `(K + F s) / (s + K)` uses the coherent bins up to this
 /// multiple of the 45-degree frequency: below the valve and the oil column, where the
 /// loop is the first-order servo with feed-forward.
-const LOW_BAND_MULTIPLE: f64 = 1.5;
+const LOW_BAND_MULTIPLE: f64 = 1.0;
+/// Feed-forward ratios of the starts read off the 45-degree frequency alone: none, and
+/// a middling one (the loop gain that puts a servo with it at 45 degrees there is then
+/// much lower): the low-band fit is bent by the valve's lag when the valve is slow.
+const FEED_FORWARD_STARTS: [f64; 2] = [0.0, 0.5];
 /// Fewest bins of that fit.
 const MIN_LOW_BINS: usize = 3;
 
 /// What the measured response of a test tells before fitting.
-#[derive(Debug, Clone, Copy, PartialEq)]
+#[derive(Debug, Clone, PartialEq)]
 pub struct LoopReading {
     /// Where the measured lag reaches 45 degrees, Hz.
     pub bandwidth_hz: f64,
-    /// The loop gain `K` (1/s) and feed-forward ratio `F` of `(K + F s) / (s + K)`
-    /// fitted below the valve and oil column; `F = 0`, `K = 2 pi bandwidth` when the
-    /// band holds too few coherent bins.
-    pub loop_gain_1_s: f64,
-    pub feed_forward_ratio: f64,
+    /// Loop gains `K` (1/s) and feed-forward ratios `F` of `(K + F s) / (s + K)` to start
+    /// from: the fit below the bandwidth (when it gives `0 <= F < 1`), and for each of
+    /// [`FEED_FORWARD_STARTS`] the `K` that puts the servo at 45 degrees at the bandwidth.
+    pub loops: Vec<(f64, f64)>,
     /// A resonance above it, Hz, when one shows.
     pub resonance_hz: Option<f64>,
 }
@@ -90,14 +93,23 @@ pub fn read_loop(c: &Campaign, i: usize) -> Option<LoopReading> {
         .filter(|&&k| h.frequency_hz[k] <= LOW_BAND_MULTIPLE * bandwidth_hz)
         .map(|&k| (h.frequency_hz[k], h.h1[k]))
         .collect();
-    let (loop_gain_1_s, feed_forward_ratio) = servo_with_feed_forward(&low)
-        .unwrap_or((2.0 * std::f64::consts::PI * bandwidth_hz, 0.0));
+    let mut loops: Vec<(f64, f64)> = servo_with_feed_forward(&low).into_iter().collect();
+    let w45 = 2.0 * std::f64::consts::PI * bandwidth_hz;
+    loops.extend(FEED_FORWARD_STARTS.iter().map(|&f| (gain_at_45(w45, f), f)));
     (bandwidth_hz > 0.0).then_some(LoopReading {
         bandwidth_hz,
-        loop_gain_1_s,
-        feed_forward_ratio,
+        loops,
         resonance_hz,
     })
+}
+
+/// The `K` for which `(K + F s) / (s + K)` lags 45 degrees at `w` rad/s:
+/// `atan(w/K) - atan(F w/K) = pi/4`, i.e. `K^2 - (1 + F) w K + F w^2 = 0` (tangent of
+/// the difference), the larger root.
+fn gain_at_45(w: f64, f: f64) -> f64 {
+    let b = (1.0 + f) * w;
+    let disc = (b * b - 4.0 * f * w * w).max(0.0);
+    (b + disc.sqrt()) / 2.0
 }
 
 /// `K` and `F` of `H = (K + F s) / (s + K)` by linear least squares on `(f, H)` points:
@@ -122,7 +134,7 @@ fn servo_with_feed_forward(points: &[(f64, Complex64)]) -> Option<(f64, f64)> {
         b[2 * k + 1] = lhs.im;
     }
     let (x, _) = super::super::lsq::linear(&a, &b)?;
-    (x[0] > 0.0 && x[0].is_finite()).then(|| (x[0], x[1].clamp(0.0, 1.0)))
+    (x[0] > 0.0 && x[0].is_finite() && (0.0..1.0).contains(&x[1])).then(|| (x[0], x[1]))
 }
 
 /// The phase lag of `h`, radians in `(-pi, pi]` (positive for a lag).
@@ -158,19 +170,20 @@ pub struct LoopStart {
     pub valve: bool,
 }
 
-/// `p` with the loop gain and feed-forward read (`K = Kp Ks Kq / A`, `F = Fv Ks Kq / A`)
-/// and the valve's time constant [`VALVE_MULTIPLE`] times faster than the bandwidth.
-pub fn with_loop(p: &Params, r: &LoopReading, what: LoopStart) -> Params {
+/// `p` with loop gain `k` and feed-forward ratio `f` (`K = Kp Ks Kq / A`,
+/// `F = Fv Ks Kq / A`) and the valve's time constant [`VALVE_MULTIPLE`] times faster
+/// than the bandwidth of `r`.
+pub fn with_loop(p: &Params, r: &LoopReading, (k, f): (f64, f64), what: LoopStart) -> Params {
     let mut q = *p;
     let a = q.actuator.piston_area_m2;
     let ks = q.servovalve.gain;
     if what.through_kp {
-        q.controller.kp = r.loop_gain_1_s * a / (ks * q.actuator.flow_gain_m3_s);
+        q.controller.kp = k * a / (ks * q.actuator.flow_gain_m3_s);
     } else {
-        q.actuator.flow_gain_m3_s = r.loop_gain_1_s * a / (ks * q.controller.kp.max(f64::MIN_POSITIVE));
+        q.actuator.flow_gain_m3_s = k * a / (ks * q.controller.kp.max(f64::MIN_POSITIVE));
     }
     if what.feed_forward {
-        q.controller.fv = r.feed_forward_ratio * a / (ks * q.actuator.flow_gain_m3_s);
+        q.controller.fv = f * a / (ks * q.actuator.flow_gain_m3_s);
     }
     if what.valve {
         q.servovalve.time_constant_s =
@@ -237,11 +250,21 @@ mod tests {
     }
 
     #[test]
+    fn the_gain_at_45_degrees_puts_the_servo_there() {
+        for f in [0.0, 0.3, 0.5, 0.8] {
+            let w = 40.0;
+            let k = gain_at_45(w, f);
+            let s = Complex64::new(0.0, w);
+            let lag = -((k + f * s) / (s + k)).arg();
+            assert!((lag - std::f64::consts::FRAC_PI_4).abs() < 1e-9, "F {f}: K {k}, lag {lag}");
+        }
+    }
+
+    #[test]
     fn starts_stay_below_nyquist() {
         let r = LoopReading {
             bandwidth_hz: 10.0,
-            loop_gain_1_s: 50.0,
-            feed_forward_ratio: 0.0,
+            loops: vec![(50.0, 0.0)],
             resonance_hz: None,
         };
         assert_eq!(oil_column_starts(&r, 1000.0), vec![30.0, 80.0, 200.0]);
