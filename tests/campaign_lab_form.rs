@@ -8,7 +8,8 @@
 use shaketable::campaign::format::{read_campaign, write_campaign};
 use shaketable::campaign::synth::{synthesise, SynthOptions};
 use shaketable::campaign::{Campaign, Control, Record};
-use shaketable::identify::identify;
+use shaketable::identify::{fit_mass, fit_servovalve, identify};
+use shaketable::params::ServovalveModel;
 use shaketable::Params;
 use std::fmt::Write as _;
 use std::path::Path;
@@ -589,22 +590,38 @@ fn tests_at_their_own_rates_read_check_identify_and_simulate() {
     // identification: the valve from R1 at 1 kHz, the mass from R2 at 512 Hz
     let id = identify(&got);
     let rel = |a: f64, b: f64| (a / b - 1.0).abs();
-    let v = id.servovalve.as_ref().expect("servovalve identified");
-    let valve_err = match truth.servovalve.model {
-        shaketable::params::ServovalveModel::SecondOrder => rel(
+    let second_order = truth.servovalve.model == ServovalveModel::SecondOrder;
+    let valve_err = |v: &shaketable::identify::ServovalveFit| match second_order {
+        true => rel(
             v.natural_frequency_hz,
             truth.servovalve.natural_frequency_hz,
         ),
-        _ => rel(v.time_constant_s, truth.servovalve.time_constant_s),
+        false => rel(v.time_constant_s, truth.servovalve.time_constant_s),
     };
     // the tolerances of tests/identify_accuracy.rs (the valve's 3 % on f_v, 10 % on tau)
-    let valve_tol = match truth.servovalve.model {
-        shaketable::params::ServovalveModel::SecondOrder => 0.03,
-        _ => 0.10,
-    };
-    assert!(valve_err < valve_tol, "valve error {valve_err}");
+    let valve_tol = if second_order { 0.03 } else { 0.10 };
+    let v = id.servovalve.as_ref().expect("servovalve identified");
+    assert!(valve_err(v) < valve_tol, "valve error {}", valve_err(v));
+    // what this checks: R1 read at the campaign's default rate would be far off
+    let (_, r1) = got.test("R1").unwrap();
+    let wrong = fit_servovalve("R1", r1, DEFAULT_HZ).map_or(f64::INFINITY, |v| valve_err(&v));
+    assert!(
+        wrong > valve_tol,
+        "R1 at the default rate: valve error {wrong}"
+    );
     let m = id.mass_random.as_ref().expect("mass identified").mass_kg;
     assert!(rel(m, truth.table.mass_kg) < 0.02, "mass {m}");
+    let (_, r2) = got.test("R2").unwrap();
+    let wrong = fit_mass("R2", r2, DEFAULT_HZ).map_or(f64::INFINITY, |m| m.mass_kg);
+    assert!(
+        rel(wrong, truth.table.mass_kg) > 0.02,
+        "R2 at the default rate: {wrong}"
+    );
+    eprintln!(
+        "valve error {:.2} %, mass error {:.2} %",
+        100.0 * valve_err(v),
+        100.0 * rel(m, truth.table.mass_kg)
+    );
     // simulate one test: written at that test's rate
     for (name, fs) in [("R1", R1_HZ), ("R2", R2_HZ)] {
         let csv = tmp.path().join(format!("{name}_sim.csv"));
