@@ -709,3 +709,36 @@ fn a_bad_per_test_rate_is_named() {
         assert!(e.contains(want), "no `{want}` in {e}");
     }
 }
+
+/// The spool refinement pools tests (diagnosis' output-error valve): each record is
+/// simulated at its own rate, so a start 30 % off comes back to the truth; read at one
+/// rate, the pooled fit is off.
+#[test]
+fn the_spool_refinement_pools_tests_each_at_its_rate() {
+    use shaketable::identify::spool::refine_servovalve;
+    let (c, truth) = two_rate_campaign();
+    let second_order = truth.servovalve.model == ServovalveModel::SecondOrder;
+    let mut start = truth.servovalve;
+    start.time_constant_s *= 1.3;
+    start.natural_frequency_hz /= 1.3;
+    let err = |v: &shaketable::params::Servovalve| match second_order {
+        true => (v.natural_frequency_hz / truth.servovalve.natural_frequency_hz - 1.0).abs(),
+        false => (v.time_constant_s / truth.servovalve.time_constant_s - 1.0).abs(),
+    };
+    let at = |rate: &dyn Fn(usize) -> f64| -> f64 {
+        let rated: Vec<_> = (0..c.records.len())
+            .map(|i| (&c.records[i], rate(i)))
+            .collect();
+        refine_servovalve(&start, &rated, |n| 0..n).map_or(f64::INFINITY, |v| err(&v))
+    };
+    let own = at(&|i| c.sample_rate_of(i));
+    // the tolerance of tests/identify_accuracy.rs on the valve (3 % on f_v, 10 % on tau)
+    let tol = if second_order { 0.03 } else { 0.10 };
+    assert!(own < tol, "each at its own rate: valve error {own}");
+    let one = at(&|_| c.info.sample_rate_hz);
+    eprintln!("valve error: each at its own rate {own:.2e}, all at one rate {one:.2e}");
+    assert!(
+        one > tol,
+        "every test at the campaign's rate: valve error {one}"
+    );
+}
