@@ -279,8 +279,11 @@ pub fn identify_screened(s: &Screening) -> Identification {
             p.actuator.model = ActuatorModel::Nonlinear;
         }
     }
-    // the segments at the campaign's rate (a test at its own rate keeps the resolution)
-    let welch = WelchOptions::for_resolution(c.info.sample_rate_hz, RESOLUTION_HZ);
+    // the segments of the random tests' spectra, at the rate of the first one used (a
+    // test at another rate keeps the resolution, with segments of its own length)
+    let first_random = roles.valve.or(roles.mass).or(roles.oil_column);
+    let welch_rate = first_random.map_or(c.info.sample_rate_hz, fs);
+    let welch = WelchOptions::for_resolution(welch_rate, RESOLUTION_HZ);
     Identification {
         campaign: c.info.name.clone(),
         servovalve: valve,
