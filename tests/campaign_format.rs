@@ -636,6 +636,7 @@ fn sample_campaign() -> Campaign {
         frequency_hz: None,
         amplitude_m: None,
         controller: ControllerOverride::default(),
+        sample_rate_hz: None,
     };
     let mut r1 = spec("R1", TestKind::Random, Control::Displacement);
     r1.rms = Some(0.005);

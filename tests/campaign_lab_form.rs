@@ -8,7 +8,8 @@
 use shaketable::campaign::format::{read_campaign, write_campaign};
 use shaketable::campaign::synth::{synthesise, SynthOptions};
 use shaketable::campaign::{Campaign, Control, Record};
-use shaketable::identify::identify;
+use shaketable::identify::{fit_mass, fit_servovalve, identify};
+use shaketable::params::ServovalveModel;
 use shaketable::Params;
 use std::fmt::Write as _;
 use std::path::Path;
@@ -519,5 +520,225 @@ fn a_matlab_recording_reads_back_through_the_mapping() {
     assert!(
         e.contains("R1.mat") && e.contains("`accel`") && e.contains("lvdt_mm"),
         "{e}"
+    );
+}
+
+// ---------------------------------------------------------------------------------------
+// tests at their own sample rates (campaign-format.md, "campaign.toml additions":
+// `sample_rate_hz` is the default for every test; a test may set its own)
+// ---------------------------------------------------------------------------------------
+
+/// Rates of the two-rate campaign: the valve test R1 at 1 kHz, the mass test R2 at the
+/// synthesiser's 512 Hz, and a campaign default that neither uses (so that a consumer
+/// reading the campaign's rate instead of the test's gets every test wrong).
+const R1_HZ: f64 = 1000.0;
+const R2_HZ: f64 = 512.0;
+const DEFAULT_HZ: f64 = 2048.0;
+
+/// R1 and R2 of the paper's program synthesised by the project's simulator, each at its
+/// own rate, 30 s of random data (enough for the valve and mass accuracies of
+/// tests/identify_accuracy.rs); returns the truth too.
+fn two_rate_campaign() -> (Campaign, Params) {
+    use shaketable::campaign::synth::{selected_program, synthesise_program};
+    let opts = SynthOptions {
+        seed: 7,
+        random_duration_s: 30.0,
+        tests: Some(vec!["R1".into(), "R2".into()]),
+        ..SynthOptions::default()
+    };
+    let mut program = selected_program(&opts);
+    for (_, spec) in &mut program {
+        spec.sample_rate_hz = Some(if spec.name == "R1" { R1_HZ } else { R2_HZ });
+    }
+    let truth = Params::trees_lab();
+    let mut c = synthesise_program(&truth, &program, &opts, None).unwrap();
+    c.info.sample_rate_hz = DEFAULT_HZ;
+    (c, truth)
+}
+
+/// Seconds between the first two samples of `csv`'s time column.
+fn first_step_s(csv: &Path) -> f64 {
+    let t = column(csv, "time_s");
+    t[1] - t[0]
+}
+
+#[test]
+fn tests_at_their_own_rates_read_check_identify_and_simulate() {
+    let (c, truth) = two_rate_campaign();
+    let tmp = tempfile::tempdir().unwrap();
+    let dir = tmp.path().join("rates");
+    write_campaign(&c, &dir).unwrap();
+    let toml = std::fs::read_to_string(dir.join("campaign.toml")).unwrap();
+    assert!(toml.contains("sample_rate_hz = 1000.0"), "{toml}");
+    // read: each time column checked against its test's rate
+    let got = read_campaign(&dir).unwrap();
+    assert_eq!(got.info.sample_rate_hz, DEFAULT_HZ);
+    for (spec, want) in got.info.tests.iter().zip([R1_HZ, R2_HZ]) {
+        assert_eq!(got.sample_rate_for(spec), want, "{}", spec.name);
+    }
+    assert_eq!(got.records, c.records);
+    // campaign check passes and says which test runs at which rate
+    let s = |p: &Path| p.to_str().unwrap().to_string();
+    let o = shaketable(&["campaign", "check", &s(&dir)]);
+    let out = String::from_utf8_lossy(&o.stdout);
+    assert!(
+        o.status.success(),
+        "{out}{}",
+        String::from_utf8_lossy(&o.stderr)
+    );
+    assert!(out.contains("R1 at 1000 Hz, R2 at 512 Hz"), "{out}");
+    // identification: the valve from R1 at 1 kHz, the mass from R2 at 512 Hz
+    let id = identify(&got);
+    let rel = |a: f64, b: f64| (a / b - 1.0).abs();
+    let second_order = truth.servovalve.model == ServovalveModel::SecondOrder;
+    let valve_err = |v: &shaketable::identify::ServovalveFit| match second_order {
+        true => rel(
+            v.natural_frequency_hz,
+            truth.servovalve.natural_frequency_hz,
+        ),
+        false => rel(v.time_constant_s, truth.servovalve.time_constant_s),
+    };
+    // the tolerances of tests/identify_accuracy.rs (the valve's 3 % on f_v, 10 % on tau)
+    let valve_tol = if second_order { 0.03 } else { 0.10 };
+    let v = id.servovalve.as_ref().expect("servovalve identified");
+    assert!(valve_err(v) < valve_tol, "valve error {}", valve_err(v));
+    // what this checks: R1 read at the campaign's default rate would be far off
+    let (_, r1) = got.test("R1").unwrap();
+    let wrong = fit_servovalve("R1", r1, DEFAULT_HZ).map_or(f64::INFINITY, |v| valve_err(&v));
+    assert!(
+        wrong > valve_tol,
+        "R1 at the default rate: valve error {wrong}"
+    );
+    let m = id.mass_random.as_ref().expect("mass identified").mass_kg;
+    assert!(rel(m, truth.table.mass_kg) < 0.02, "mass {m}");
+    let (_, r2) = got.test("R2").unwrap();
+    let wrong = fit_mass("R2", r2, DEFAULT_HZ).map_or(f64::INFINITY, |m| m.mass_kg);
+    assert!(
+        rel(wrong, truth.table.mass_kg) > 0.02,
+        "R2 at the default rate: {wrong}"
+    );
+    eprintln!(
+        "valve error {:.2} %, mass error {:.2} %",
+        100.0 * valve_err(v),
+        100.0 * rel(m, truth.table.mass_kg)
+    );
+    // simulate one test: written at that test's rate
+    for (name, fs) in [("R1", R1_HZ), ("R2", R2_HZ)] {
+        let csv = tmp.path().join(format!("{name}_sim.csv"));
+        let o = shaketable(&[
+            "simulate",
+            "--campaign",
+            &s(&dir),
+            "--test",
+            name,
+            "--out",
+            &s(&csv),
+        ]);
+        assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+        assert!((first_step_s(&csv) * fs - 1.0).abs() < 1e-9, "{name}");
+        let (_, rec) = got.test(name).unwrap();
+        assert_eq!(column(&csv, "time_s").len(), rec.len(), "{name}");
+    }
+}
+
+/// In a laboratory's form without a time column, each test's time comes from its own rate.
+#[test]
+fn a_lab_export_at_two_rates_takes_each_tests_time_from_its_rate() {
+    let (c, _) = two_rate_campaign();
+    let tmp = tempfile::tempdir().unwrap();
+    let dir = tmp.path().join("lab");
+    write_lab_campaign(&c, &dir);
+    let lab = read_campaign(&dir).unwrap();
+    for ((spec, a), b) in c.info.tests.iter().zip(&lab.records).zip(&c.records) {
+        assert_eq!(a.len(), b.len(), "{}", spec.name);
+        let last = a.len() - 1;
+        assert!(
+            (a.time_s[last] - b.time_s[last]).abs() < 1e-9,
+            "{}",
+            spec.name
+        );
+    }
+}
+
+/// A bad per-test rate is an error naming campaign.toml's line, the test and the key; a
+/// rate the test's time column disagrees with names the record's line and where the rate
+/// was given.
+#[test]
+fn a_bad_per_test_rate_is_named() {
+    let (c, _) = two_rate_campaign();
+    let tmp = tempfile::tempdir().unwrap();
+    let dir = tmp.path().join("rates");
+    write_campaign(&c, &dir).unwrap();
+    let toml = std::fs::read_to_string(dir.join("campaign.toml")).unwrap();
+    let line = toml
+        .lines()
+        .position(|l| l == "sample_rate_hz = 1000.0")
+        .unwrap()
+        + 1;
+    for (bad, why) in [
+        ("0.0", "must be a finite number > 0"),
+        ("-512.0", "must be a finite number > 0"),
+        ("nan", "must be finite"),
+        ("\"fast\"", "expected a number"),
+    ] {
+        let text = toml.replace(
+            "sample_rate_hz = 1000.0",
+            &format!("sample_rate_hz = {bad}"),
+        );
+        std::fs::write(dir.join("campaign.toml"), text).unwrap();
+        let e = read_campaign(&dir).unwrap_err().to_string();
+        for want in [
+            "campaign.toml: ",
+            &format!("line {line}: "),
+            "test `R1`",
+            "key `sample_rate_hz`",
+            why,
+        ] {
+            assert!(e.contains(want), "{bad}: no `{want}` in {e}");
+        }
+    }
+    // 1 % off the time column's 1 kHz: a rate mismatch, named in both files
+    let text = toml.replace("sample_rate_hz = 1000.0", "sample_rate_hz = 1010.0");
+    std::fs::write(dir.join("campaign.toml"), text).unwrap();
+    let e = read_campaign(&dir).unwrap_err().to_string();
+    for want in [
+        "R1.csv: line 3: sample rate disagrees",
+        "1000 Hz",
+        &format!("campaign.toml line {line} (test `R1`, key `sample_rate_hz`) says 1010 Hz"),
+    ] {
+        assert!(e.contains(want), "no `{want}` in {e}");
+    }
+}
+
+/// The spool refinement pools tests (diagnosis' output-error valve): each record is
+/// simulated at its own rate, so a start 30 % off comes back to the truth; read at one
+/// rate, the pooled fit is off.
+#[test]
+fn the_spool_refinement_pools_tests_each_at_its_rate() {
+    use shaketable::identify::spool::refine_servovalve;
+    let (c, truth) = two_rate_campaign();
+    let second_order = truth.servovalve.model == ServovalveModel::SecondOrder;
+    let mut start = truth.servovalve;
+    start.time_constant_s *= 1.3;
+    start.natural_frequency_hz /= 1.3;
+    let err = |v: &shaketable::params::Servovalve| match second_order {
+        true => (v.natural_frequency_hz / truth.servovalve.natural_frequency_hz - 1.0).abs(),
+        false => (v.time_constant_s / truth.servovalve.time_constant_s - 1.0).abs(),
+    };
+    let at = |rate: &dyn Fn(usize) -> f64| -> f64 {
+        let rated: Vec<_> = (0..c.records.len())
+            .map(|i| (&c.records[i], rate(i)))
+            .collect();
+        refine_servovalve(&start, &rated, |n| 0..n).map_or(f64::INFINITY, |v| err(&v))
+    };
+    let own = at(&|i| c.sample_rate_of(i));
+    // the tolerance of tests/identify_accuracy.rs on the valve (3 % on f_v, 10 % on tau)
+    let tol = if second_order { 0.03 } else { 0.10 };
+    assert!(own < tol, "each at its own rate: valve error {own}");
+    let one = at(&|_| c.info.sample_rate_hz);
+    eprintln!("valve error: each at its own rate {own:.2e}, all at one rate {one:.2e}");
+    assert!(
+        one > tol,
+        "every test at the campaign's rate: valve error {one}"
     );
 }

@@ -266,8 +266,9 @@ pub fn skeleton(name: &str, found: &[Sniffed], skipped: &[Skipped]) -> String {
         common.1
     );
     s.push_str(COLUMNS_HELP);
+    let campaign_rate = rate.as_ref().map(|(fs, _)| *fs);
     for f in found {
-        s.push_str(&test_entry(f, common));
+        s.push_str(&test_entry(f, common, campaign_rate));
     }
     for k in skipped {
         let _ = writeln!(s, "\n# skipped {}: {}", k.file, k.why);
@@ -290,7 +291,10 @@ fn most_common_read(found: &[Sniffed]) -> (&'static str, usize) {
         .map_or((",", 1), |(k, _)| *k)
 }
 
-fn test_entry(f: &Sniffed, common: (&'static str, usize)) -> String {
+/// The `[[test]]` entry of file `f`; its own `sample_rate_hz` when the rate guessed from
+/// it differs from the campaign's `campaign_rate` (campaign-format.md: a test may set its
+/// own).
+fn test_entry(f: &Sniffed, common: (&'static str, usize), campaign_rate: Option<f64>) -> String {
     let mut s = String::new();
     let stem = Path::new(&f.file)
         .file_stem()
@@ -309,6 +313,17 @@ fn test_entry(f: &Sniffed, common: (&'static str, usize)) -> String {
         s,
         "control = \"displacement\"  # displacement | acceleration (FILL IN)"
     );
+    if let Some((fs, from)) = f
+        .sample_rate
+        .as_ref()
+        .filter(|(fs, _)| Some(*fs) != campaign_rate)
+    {
+        let _ = writeln!(
+            s,
+            "sample_rate_hz = {fs:?}    # guessed from {}: check it",
+            from.replace('"', "'")
+        );
+    }
     if (f.delimiter, f.header_line) != common {
         let _ = writeln!(
             s,
@@ -417,6 +432,9 @@ mod tests {
         assert_eq!(tests.len(), 3);
         assert!(tests[0].get("read").is_none());
         assert_eq!(tests[2]["read"]["delimiter"].as_str(), Some(";"));
+        // a file at another rate than the campaign's gets its own
+        assert_eq!(tests[2]["sample_rate_hz"].as_float(), Some(2.0));
+        assert!(tests[0].get("sample_rate_hz").is_none());
         assert!(text.contains("# skipped notes.pdf: not text"));
         assert!(text.contains("\"CHANNEL0\": -0.0209, -0.0221, -0.0221"));
     }

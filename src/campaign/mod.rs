@@ -212,6 +212,12 @@ pub struct TestSpec {
     pub amplitude_m: Option<f64>,
     #[serde(default, skip_serializing_if = "is_default_override")]
     pub controller: ControllerOverride,
+    /// The test's own sample rate, Hz, when campaign.toml gives one (campaign-format.md,
+    /// "campaign.toml additions": `sample_rate_hz` is the default for every test; a test
+    /// may set its own). `None`: the campaign's; read it with
+    /// [`CampaignInfo::sample_rate_for`].
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub sample_rate_hz: Option<f64>,
 }
 
 fn is_default_override(o: &ControllerOverride) -> bool {
@@ -222,11 +228,21 @@ fn is_default_override(o: &ControllerOverride) -> bool {
 #[derive(Debug, Clone, PartialEq)]
 pub struct CampaignInfo {
     pub name: String,
+    /// The default rate of every test, Hz; a test may have its own
+    /// ([`TestSpec::sample_rate_hz`], read with [`Self::sample_rate_for`]).
     pub sample_rate_hz: f64,
     pub geometry: Geometry,
     /// The gains campaign.toml gives (each may be unknown).
     pub controller: ControllerOverride,
     pub tests: Vec<TestSpec>,
+}
+
+impl CampaignInfo {
+    /// The sample rate of test `spec`, Hz: its own, else the campaign's
+    /// (campaign-format.md, "campaign.toml additions").
+    pub fn sample_rate_for(&self, spec: &TestSpec) -> f64 {
+        spec.sample_rate_hz.unwrap_or(self.sample_rate_hz)
+    }
 }
 
 /// One recorded test: the channels of the CSV, SI units, uniform sampling.
@@ -328,6 +344,20 @@ impl Campaign {
             .iter()
             .position(|t| t.name == name)
             .map(|i| (&self.info.tests[i], &self.records[i]))
+    }
+
+    /// The sample rate of test `spec`, Hz ([`CampaignInfo::sample_rate_for`]).
+    pub fn sample_rate_for(&self, spec: &TestSpec) -> f64 {
+        self.info.sample_rate_for(spec)
+    }
+
+    /// The sample rate of the `i`-th test (and record), Hz; the campaign's when `i` is
+    /// out of range.
+    pub fn sample_rate_of(&self, i: usize) -> f64 {
+        self.info
+            .tests
+            .get(i)
+            .map_or(self.info.sample_rate_hz, |t| self.sample_rate_for(t))
     }
 
     /// The controller gains in force during test `spec`, or the gains nobody gave.

@@ -84,7 +84,7 @@ pub fn screen(c: &Campaign) -> Screening {
     for (spec, rec) in c.info.tests.iter().zip(&c.records) {
         let mut rec = rec.clone();
         let before = findings.len();
-        let ok = screen_record(spec, &mut rec, c.info.sample_rate_hz, &mut findings);
+        let ok = screen_record(spec, &mut rec, c.sample_rate_for(spec), &mut findings);
         for f in &mut findings[before..] {
             f.test = spec.name.clone();
             f.file = spec.file.clone();

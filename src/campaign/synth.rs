@@ -222,6 +222,7 @@ fn spec(name: &str, kind: TestKind, control: Control) -> TestSpec {
         frequency_hz: None,
         amplitude_m: None,
         controller: ControllerOverride::default(),
+        sample_rate_hz: None,
     }
 }
 
@@ -343,6 +344,9 @@ fn check_spec(spec: &TestSpec, random_duration_s: f64, fs: f64) -> Result<(), Sy
             message: m.to_string(),
         })
     };
+    if !(fs.is_finite() && fs > 0.0) {
+        return bad("sample_rate_hz must be finite and > 0");
+    }
     match spec.kind {
         TestKind::Record => {
             return bad(
@@ -722,7 +726,8 @@ pub fn synthesise_test(
 pub type Progress<'a> = &'a (dyn Fn(u64, u64) + Sync);
 
 /// Synthesise any list of tests (`(index, spec)`: index selects the random streams) in
-/// parallel. The campaign's `[controller]` and geometry come from `params`.
+/// parallel, each at its own `sample_rate_hz` if it has one, else at [`SAMPLE_RATE_HZ`]
+/// (the campaign's rate). The campaign's `[controller]` and geometry come from `params`.
 pub fn synthesise_program(
     params: &Params,
     program: &[(usize, TestSpec)],
@@ -730,18 +735,19 @@ pub fn synthesise_program(
     progress: Option<Progress>,
 ) -> Result<Campaign, SynthError> {
     let fs = SAMPLE_RATE_HZ;
+    let rate = |s: &TestSpec| s.sample_rate_hz.unwrap_or(fs);
     for (_, s) in program {
-        check_spec(s, opts.random_duration_s, fs)?;
+        check_spec(s, opts.random_duration_s, rate(s))?;
     }
     let total: u64 = program
         .iter()
-        .map(|(_, s)| test_samples(s, opts.random_duration_s, fs) as u64)
+        .map(|(_, s)| test_samples(s, opts.random_duration_s, rate(s)) as u64)
         .sum();
     let done = AtomicU64::new(0);
     let records = program
         .par_iter()
         .map(|(i, s)| {
-            let t = synthesise_test(params, s, *i, opts, fs)?;
+            let t = synthesise_test(params, s, *i, opts, rate(s))?;
             let d =
                 done.fetch_add(t.record.len() as u64, Ordering::Relaxed) + t.record.len() as u64;
             if let Some(cb) = progress {

@@ -9,7 +9,7 @@ use super::output::{Candidate, Diagnosis};
 use super::part::Part;
 use super::residuals::{estimate_noise, ratios, simulate_test, NoiseFloor, Whitening};
 use super::{trace_enabled, unphysical, Progress, EXPLAINED_RATIO, MISS_RATIO, REQUIRED_GAIN};
-use crate::campaign::Campaign;
+use crate::campaign::{Campaign, Record};
 use crate::identify::lsq::LsqOptions;
 use crate::identify::spool::refine_servovalve;
 use crate::identify::Identification;
@@ -271,9 +271,10 @@ pub(super) fn diagnose_with(
     let noise = estimate_noise(c);
     let mut base = id.params;
     // the valve by output error on the spool channel (fitting halves)
-    if let Some(v) = refine_servovalve(&base.servovalve, &c.records, c.info.sample_rate_hz, |n| {
-        Part::Fit.range(n)
-    }) {
+    let rated: Vec<(&Record, f64)> = (0..c.records.len())
+        .map(|i| (&c.records[i], c.sample_rate_of(i)))
+        .collect();
+    if let Some(v) = refine_servovalve(&base.servovalve, &rated, |n| Part::Fit.range(n)) {
         base.servovalve = v;
     }
     let spool_valve = base.servovalve;

@@ -20,8 +20,8 @@ pub(super) fn indices(c: &Campaign, names: &[&str]) -> Vec<usize> {
 /// [`crate::identify::select`]), the reference acceleration as instrument, on 1-40 Hz.
 pub(super) fn apparent_mass(c: &Campaign) -> Option<(Vec<f64>, Vec<Complex64>)> {
     let roles = random_roles(c);
-    let r = &c.records[roles.mass.or(roles.oil_column)?];
-    let fs = c.info.sample_rate_hz;
+    let i = roles.mass.or(roles.oil_column)?;
+    let (r, fs) = (&c.records[i], c.sample_rate_of(i));
     let w = Welch::new(
         fs,
         WelchOptions::for_resolution(fs, 0.25).fit_to(r.len(), 8),
@@ -92,7 +92,7 @@ pub(super) fn starts(
             let mut vmax: f64 = 0.0;
             for (spec, r) in c.info.tests.iter().zip(&c.records) {
                 if let (TestKind::Sine, Some(x)) = (spec.kind, r.displacement_m.as_deref()) {
-                    let fs = c.info.sample_rate_hz;
+                    let fs = c.sample_rate_for(spec);
                     for k in 8..x.len() {
                         vmax = vmax.max(((x[k] - x[k - 8]) * fs / 8.0).abs());
                     }
@@ -127,8 +127,8 @@ pub(super) fn foundation_start(c: &Campaign, table_mass_kg: f64) -> Option<Vec<f
     // the broadest excitation first: the oil-column test (R3), the mass test, the valve
     // test ([`crate::identify::select`])
     let roles = random_roles(c);
-    let r = &c.records[roles.oil_column.or(roles.mass).or(roles.valve)?];
-    let fs = c.info.sample_rate_hz;
+    let i = roles.oil_column.or(roles.mass).or(roles.valve)?;
+    let (r, fs) = (&c.records[i], c.sample_rate_of(i));
     let w = Welch::new(
         fs,
         WelchOptions::for_resolution(fs, 0.25).fit_to(r.len(), 4),

@@ -49,7 +49,6 @@ pub struct CurvePoint {
 pub fn measured_curve(c: &Campaign, base: &Params, tests: &[usize]) -> Vec<CurvePoint> {
     let nb = BIN_EDGES_M_S.len() - 1;
     let mut sum = vec![(0.0, 0.0, 0usize); nb];
-    let fs = c.info.sample_rate_hz;
     let h = SLOPE_HALF_WIDTH;
     // sum of k^2 for k = -h..=h: the slope estimator's normaliser
     let norm = (h * (h + 1) * (2 * h + 1)) as f64 / 3.0;
@@ -59,6 +58,7 @@ pub fn measured_curve(c: &Campaign, base: &Params, tests: &[usize]) -> Vec<Curve
             continue;
         }
         let r = &c.records[i];
+        let fs = c.sample_rate_of(i);
         let (Some(xs), Some(accel), Some(force)) = (
             r.displacement_m.as_deref(),
             r.acceleration_m_s2.as_deref(),

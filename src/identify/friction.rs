@@ -28,7 +28,6 @@ pub(super) fn steady_range(spec: &TestSpec, rec: &Record) -> std::ops::Range<usi
 /// Triangles (eqs. 4.9-4.10): away from reversals the acceleration is zero and
 /// `F_A - M a = k x + F_mu sign(v)`; least squares over every triangle.
 pub fn fit_triangles(c: &Campaign, mass_kg: f64) -> Result<TriangleFit, IdentifyError> {
-    let fs = c.info.sample_rate_hz;
     let (mut rows, mut rhs, mut names) = (Vec::new(), Vec::new(), Vec::new());
     let mut cycles = 0.0;
     for (spec, rec) in c.info.tests.iter().zip(&c.records) {
@@ -48,6 +47,7 @@ pub fn fit_triangles(c: &Campaign, mass_kg: f64) -> Result<TriangleFit, Identify
             continue; // the force balance needs all three
         };
         names.push(spec.name.clone());
+        let fs = c.sample_rate_for(spec);
         let range = steady_range(spec, rec);
         cycles +=
             range.len() as f64 / fs * spec.frequency_hz.filter(|f| f.is_finite()).unwrap_or(0.0);
@@ -137,7 +137,6 @@ pub(super) struct SineData {
 /// The sine tests `names` of `c` with at least [`MIN_SINE_CYCLES`] steady cycles; the
 /// others are named in the second list with the reason.
 pub(super) fn sine_data(c: &Campaign, names: &[&str]) -> (Vec<SineData>, Vec<String>) {
-    let fs = c.info.sample_rate_hz;
     let mut short = Vec::new();
     let data = names
         .iter()
@@ -155,7 +154,7 @@ pub(super) fn sine_data(c: &Campaign, names: &[&str]) -> (Vec<SineData>, Vec<Str
             }
             let r = steady_range(spec, rec);
             let f = spec.frequency_hz.filter(|f| f.is_finite()).unwrap_or(0.0);
-            let cycles = r.len() as f64 / fs * f;
+            let cycles = r.len() as f64 / c.sample_rate_for(spec) * f;
             let ok = cycles >= MIN_SINE_CYCLES;
             if !ok {
                 short.push(format!(
@@ -170,7 +169,7 @@ pub(super) fn sine_data(c: &Campaign, names: &[&str]) -> (Vec<SineData>, Vec<Str
             // every channel is there: the filter above kept only such tests
             let get = |m| rec.measured(m).unwrap_or_default();
             let xs = smooth(get(Measured::Displacement), 8);
-            let v = derivative(&xs, fs);
+            let v = derivative(&xs, c.sample_rate_for(spec));
             SineData {
                 name: spec.name.clone(),
                 x: xs[r.clone()].to_vec(),

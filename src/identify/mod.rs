@@ -155,7 +155,8 @@ fn in_file<T>(c: &Campaign, name: &str, r: Result<T, IdentifyError>) -> Result<T
 /// [`identify`] on an already screened campaign.
 pub fn identify_screened(s: &Screening) -> Identification {
     let c = &s.campaign;
-    let fs = c.info.sample_rate_hz;
+    // each test at its own rate (campaign-format.md, "campaign.toml additions")
+    let fs = |i: usize| c.sample_rate_of(i);
     let g = &c.info.geometry;
     let mut missing = Vec::new();
     let mut note = |r: Result<(), IdentifyError>| {
@@ -177,7 +178,7 @@ pub fn identify_screened(s: &Screening) -> Identification {
     let roles = select::random_roles(c);
     let name = |i: usize| c.info.tests[i].name.as_str();
     let valve = match roles.valve {
-        Some(i) => in_file(c, name(i), fit_servovalve(name(i), &c.records[i], fs)),
+        Some(i) => in_file(c, name(i), fit_servovalve(name(i), &c.records[i], fs(i))),
         None => Err(absent_role(
             s,
             "valve test (a random test recording the valve command and the spool)",
@@ -193,7 +194,7 @@ pub fn identify_screened(s: &Screening) -> Identification {
         p.servovalve.damping_ratio = v.damping_ratio;
     }
     let mass_random = match roles.mass {
-        Some(i) => in_file(c, name(i), fit_mass(name(i), &c.records[i], fs)),
+        Some(i) => in_file(c, name(i), fit_mass(name(i), &c.records[i], fs(i))),
         None => Err(absent_role(
             s,
             "mass test (a random test besides the valve test)",
@@ -225,7 +226,7 @@ pub fn identify_screened(s: &Screening) -> Identification {
     // refine the random-data mass with the friction removed in the time domain
     let mass_random = match (&mass_random, &friction, roles.mass) {
         (Some(_), Some(fr), Some(i)) => {
-            fit_mass_corrected(name(i), &c.records[i], fs, Some((fr, k)))
+            fit_mass_corrected(name(i), &c.records[i], fs(i), Some((fr, k)))
                 .ok()
                 .or(mass_random)
         }
@@ -249,7 +250,7 @@ pub fn identify_screened(s: &Screening) -> Identification {
             in_file(
                 c,
                 name(i),
-                fit_oil_column(name(i), &c.records[i], fs, &og, m),
+                fit_oil_column(name(i), &c.records[i], fs(i), &og, m),
             )
         }),
         (Some(_), None) => Err(IdentifyError::NeedsUpstream {
@@ -295,7 +296,11 @@ pub fn identify_screened(s: &Screening) -> Identification {
         Some(cl) => cl.fits.clone(),
         None => compare_all(c, &p),
     };
-    let welch = WelchOptions::for_resolution(fs, RESOLUTION_HZ);
+    // the segments of the random tests' spectra, at the rate of the first one used (a
+    // test at another rate keeps the resolution, with segments of its own length)
+    let first_random = roles.valve.or(roles.mass).or(roles.oil_column);
+    let welch_rate = first_random.map_or(c.info.sample_rate_hz, fs);
+    let welch = WelchOptions::for_resolution(welch_rate, RESOLUTION_HZ);
     Identification {
         campaign: c.info.name.clone(),
         servovalve: valve,

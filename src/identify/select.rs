@@ -16,7 +16,7 @@
 //! - **loop mass** (4.2.2): the other sines, where inertia dominates (S3, S6, S9).
 //! - **stiffness and sliding friction** (4.2.1): every triangle test.
 
-use crate::campaign::{Campaign, Control, Measured, TestKind, TestSpec};
+use crate::campaign::{Campaign, Control, Measured, TestKind};
 use std::f64::consts::PI;
 
 /// A sine is slow (friction shows, inertia does not) when its inertia force amplitude is
@@ -50,10 +50,12 @@ impl RandomRoles {
     }
 }
 
-/// Upper edge of a random test's band: declared, else unbounded (a lab's white noise to
-/// its controller's limit).
-fn band_top_hz(spec: &TestSpec) -> f64 {
-    spec.band_hz.map_or(f64::INFINITY, |b| b[1])
+/// Upper edge of the `i`-th test's band: declared, else the Nyquist frequency of the
+/// test's own rate (a lab's white noise to its controller's limit, which sampling bounds).
+fn band_top_hz(c: &Campaign, i: usize) -> f64 {
+    c.info.tests[i]
+        .band_hz
+        .map_or(c.sample_rate_of(i) / 2.0, |b| b[1])
 }
 
 fn rms(x: &[f64]) -> f64 {
@@ -87,11 +89,7 @@ pub fn random_roles(c: &Campaign) -> RandomRoles {
     };
     let with_spool = recording(VALVE_NEEDS);
     let valve = best_by(&with_spool, |i| {
-        (
-            control(i) == Control::Displacement,
-            true,
-            band_top_hz(&c.info.tests[i]),
-        )
+        (control(i) == Control::Displacement, true, band_top_hz(c, i))
     });
     let mass = best_by(&recording(MASS_NEEDS), |i| {
         let strength = rms(c.records[i]
@@ -101,7 +99,7 @@ pub fn random_roles(c: &Campaign) -> RandomRoles {
         (control(i) == Control::Acceleration, true, strength)
     });
     let oil_column = best_by(&recording(OIL_COLUMN_NEEDS), |i| {
-        let band = band_top_hz(&c.info.tests[i]);
+        let band = band_top_hz(c, i);
         (
             Some(i) != mass && has_spool(i),
             control(i) == Control::Acceleration,

@@ -100,21 +100,23 @@ fn with_theta(v: &Servovalve, t: &[f64]) -> Servovalve {
 }
 
 /// Refine `start` (its model kept) by output-error least squares of the spool position on
-/// the samples `range(len)` of `records` that have a spool channel. Returns `None` when no
-/// record has one or the fit fails; the caller keeps the FRF estimate then.
+/// the samples `range(len)` of `records` that have a spool channel, each record with its
+/// sample rate, Hz (a test may have its own: campaign-format.md, "campaign.toml
+/// additions"). Returns `None` when no record has one or the fit fails; the caller keeps
+/// the FRF estimate then.
 pub fn refine_servovalve(
     start: &Servovalve,
-    records: &[Record],
-    sample_rate_hz: f64,
+    records: &[(&Record, f64)],
     range: impl Fn(usize) -> std::ops::Range<usize> + Sync,
 ) -> Option<Servovalve> {
-    let data: Vec<(&[f64], &[f64], std::ops::Range<usize>)> = records
+    type Data<'a> = (&'a [f64], &'a [f64], std::ops::Range<usize>, f64);
+    let data: Vec<Data<'_>> = records
         .iter()
-        .filter_map(|r| {
+        .filter_map(|&(r, fs)| {
             let x = r.spool_position.as_deref()?;
             let u = r.valve_command.as_deref()?;
             let rg = range(r.len());
-            (!rg.is_empty()).then_some((&u[..rg.end], &x[..rg.end], rg))
+            (!rg.is_empty()).then_some((&u[..rg.end], &x[..rg.end], rg, fs))
         })
         .collect();
     if data.is_empty() {
@@ -128,8 +130,8 @@ pub fn refine_servovalve(
         |t| {
             let v = with_theta(start, t);
             let mut r = Vec::new();
-            for (u, x, rg) in &data {
-                let sim = spool_response(&v, u, sample_rate_hz);
+            for (u, x, rg, fs) in &data {
+                let sim = spool_response(&v, u, *fs);
                 r.extend(rg.clone().map(|k| x[k] - sim[k]));
             }
             r.iter().all(|x| x.is_finite()).then_some(r)

@@ -29,7 +29,7 @@ pub fn validate(c: &Campaign, name: &str, params: &Params) -> Result<Validation,
     let (spec, rec) = c
         .test(name)
         .ok_or_else(|| IdentifyError::not_usable(format!("no {name} test: validation skipped")))?;
-    let fs = c.info.sample_rate_hz;
+    let fs = c.sample_rate_for(spec);
     let mut p = *params;
     p.controller = c.controller_for(spec).map_err(IdentifyError::not_usable)?;
     let meas = table_tf_of(rec, fs)?;

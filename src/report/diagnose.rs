@@ -55,7 +55,7 @@ pub fn write(dir: &Path, c: &Campaign, d: &Diagnosis) -> Result<(), super::Repor
                     .total_cmp(&(m[b] - simulated(&base[b], ch)).abs())
             })
             .unwrap_or(0);
-        let half = (0.75 * c.info.sample_rate_hz) as usize;
+        let half = (0.75 * c.sample_rate_of(i)) as usize;
         let (lo, hi) = (k.saturating_sub(half), (k + half).min(m.len()));
         let t: Vec<f64> = r.time_s[lo..hi].to_vec();
         let meas: Vec<f64> = m[lo..hi].to_vec();
@@ -103,7 +103,7 @@ pub fn write(dir: &Path, c: &Campaign, d: &Diagnosis) -> Result<(), super::Repor
     let roles = crate::identify::select::random_roles(c);
     if let Some(i) = roles.mass.or(roles.oil_column) {
         let r = &c.records[i];
-        let fs = c.info.sample_rate_hz;
+        let fs = c.sample_rate_of(i);
         if let Ok(w) = Welch::new(
             fs,
             WelchOptions::for_resolution(fs, 0.25).fit_to(r.len(), 8),

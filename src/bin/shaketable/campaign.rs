@@ -213,14 +213,31 @@ fn rms_cell(x: Option<&[f64]>) -> String {
     x.map_or("absent".into(), |x| format!("{:.4e}", rms(x)))
 }
 
+/// The tests at a rate of their own (campaign-format.md, "campaign.toml additions"), as
+/// a note after the campaign's rate; empty when every test is at the campaign's.
+fn own_rates(info: &shaketable::campaign::CampaignInfo) -> String {
+    let own: Vec<String> = info
+        .tests
+        .iter()
+        .filter(|t| info.sample_rate_for(t) != info.sample_rate_hz)
+        .map(|t| format!("{} at {} Hz", t.name, info.sample_rate_for(t)))
+        .collect();
+    if own.is_empty() {
+        String::new()
+    } else {
+        format!(" (the default; {})", own.join(", "))
+    }
+}
+
 fn run_check(a: CheckArgs) -> anyhow::Result<()> {
     use shaketable::campaign::ControllerOverride;
     let c = read_campaign(&a.dir).with_context(|| format!("campaign {}", a.dir.display()))?;
     println!(
-        "{}: \"{}\", {} Hz",
+        "{}: \"{}\", {} Hz{}",
         a.dir.display(),
         c.info.name,
-        c.info.sample_rate_hz
+        c.info.sample_rate_hz,
+        own_rates(&c.info)
     );
     println!(
         "{:<6} {:<9} {:<13} {:>9} {:>12} {:>12} {:>12} {:>6}  extra",
@@ -228,7 +245,7 @@ fn run_check(a: CheckArgs) -> anyhow::Result<()> {
     );
     let mut total = 0.0;
     for (t, r) in c.info.tests.iter().zip(&c.records) {
-        let len = r.len() as f64 / c.info.sample_rate_hz;
+        let len = r.len() as f64 / c.sample_rate_for(t);
         total += len;
         println!(
             "{:<6} {:<9} {:<13} {:>9.2} {:>12.4e} {:>12} {:>12} {:>6}  {}",

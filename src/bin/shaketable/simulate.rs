@@ -187,19 +187,29 @@ fn test_reference(
         anyhow::bail!("{}: no test `{name}`", dir.display());
     };
     apply_test_controller(params, &info, spec, dir);
-    if let Some(fs) = a.sample_rate.filter(|fs| *fs != info.sample_rate_hz) {
+    // the test's own rate, else the campaign's (campaign-format.md)
+    let rate = info.sample_rate_for(spec);
+    if let Some(fs) = a.sample_rate.filter(|fs| *fs != rate) {
         anyhow::bail!(
-            "--sample-rate {fs} Hz disagrees with the campaign's {} Hz",
-            info.sample_rate_hz
+            "--sample-rate {fs} Hz disagrees with {}",
+            rate_origin(spec, rate)
         );
     }
     Ok(ReferenceRecord {
-        sample_rate_hz: info.sample_rate_hz,
+        sample_rate_hz: rate,
         time_s: record.time_s,
         ref_displacement_m: record.ref_displacement_m,
         ref_velocity_m_s: record.ref_velocity_m_s,
         ref_acceleration_m_s2: record.ref_acceleration_m_s2,
     })
+}
+
+/// Test `spec`'s rate `rate` and where it comes from, for a message.
+fn rate_origin(spec: &TestSpec, rate: f64) -> String {
+    match spec.sample_rate_hz {
+        Some(_) => format!("test `{}`'s own {rate} Hz", spec.name),
+        None => format!("the campaign's {rate} Hz"),
+    }
 }
 
 /// The reference of `--reference FILE`, with the controller override of the campaign
@@ -216,7 +226,7 @@ fn file_reference(
         match find_test(info, dir, reference_file) {
             Some(t) => {
                 apply_test_controller(params, info, t, dir);
-                fs = fs.or(Some(info.sample_rate_hz));
+                fs = fs.or(Some(info.sample_rate_for(t)));
             }
             None if a.campaign_dir.is_some() => anyhow::bail!(
                 "{}: no test of {} lists this file",

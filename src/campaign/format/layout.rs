@@ -120,7 +120,11 @@ pub struct ReadPlan {
     /// False for the project's own form (no `[read]` or `[columns]` anywhere): every
     /// cell must be a number and every channel of the first form is required as is.
     pub lab_form: bool,
+    /// The test's rate: its own `sample_rate_hz`, else the campaign's.
     pub sample_rate_hz: f64,
+    /// The line of campaign.toml giving the test's own `sample_rate_hz`, if it has one
+    /// (named when the time column disagrees with it).
+    pub own_rate_line: Option<usize>,
     pub control: Control,
 }
 
@@ -132,6 +136,7 @@ impl ReadPlan {
             columns: BTreeMap::new(),
             lab_form: false,
             sample_rate_hz,
+            own_rate_line: None,
             control,
         }
     }

@@ -6,10 +6,11 @@
 //! round-trip representation), so a record read back is bit-for-bit the record written.
 //!
 //! Choices where the format page is silent:
-//! - campaign.toml: `name` may be omitted (the directory name is used); `sample_rate_hz`,
-//!   every `[geometry]` key, every `[controller]` gain and, per test, `name`, `file`,
-//!   `kind`, `control` (+ `rms`, `band_hz` for random, `frequency_hz`, `amplitude_m` for
-//!   sine/triangle) are required. Unknown keys are accepted and ignored, except inside
+//! - campaign.toml: `name` may be omitted (the directory name is used); `sample_rate_hz`
+//!   (the default of every test; a test may give its own, checked by the same rules and
+//!   bounding that test's frequencies), every `[geometry]` key, every `[controller]` gain
+//!   and, per test, `name`, `file`, `kind`, `control` (+ `rms`, `band_hz` for random,
+//!   `frequency_hz`, `amplitude_m` for sine/triangle) are required. Unknown keys are accepted and ignored, except inside
 //!   `[controller]` and a test's `controller = {...}` override, where an unknown gain
 //!   (e.g. a typo `Fv`) would silently change the physics, so it is an error.
 //! - Duplicate test names, two tests on one file, and a campaign without tests are errors.
@@ -499,6 +500,19 @@ fn locate_test_files(
     Ok(paths)
 }
 
+/// Where test `spec`'s rate comes from, for a time column that disagrees with it:
+/// campaign.toml, with the line, test and key of the test's own `sample_rate_hz` when it
+/// has one (campaign-format.md, "Bad input in this form").
+fn rate_source(plan: &ReadPlan, toml_file: &str, spec: &TestSpec) -> String {
+    match plan.own_rate_line {
+        Some(line) => format!(
+            "{toml_file} line {line} (test `{}`, key `sample_rate_hz`)",
+            spec.name
+        ),
+        None => toml_file.to_string(),
+    }
+}
+
 /// Read a whole campaign: campaign.toml and every record it lists, in parallel.
 pub fn read_campaign(dir: &Path) -> Result<Campaign, CampaignError> {
     let root = campaign_root(dir)?;
@@ -512,7 +526,7 @@ pub fn read_campaign(dir: &Path) -> Result<Campaign, CampaignError> {
         .zip(plans.par_iter())
         .map(|((spec, real), plan)| {
             let shown = display(&dir.join(&spec.file));
-            read_test_file(real, &shown, plan, &toml_file)
+            read_test_file(real, &shown, plan, &rate_source(plan, &toml_file, spec))
         })
         .collect();
     let mut records = Vec::with_capacity(results.len());
@@ -547,7 +561,8 @@ pub fn read_campaign_test(dir: &Path, name: &str) -> Result<(CampaignInfo, Recor
     };
     let real = locate_test_files(&root, dir, &info, &file_lines, &plans, &toml_file)?;
     let shown = display(&dir.join(&info.tests[i].file));
-    let record = read_test_file(&real[i], &shown, &plans[i], &toml_file)?;
+    let source = rate_source(&plans[i], &toml_file, &info.tests[i]);
+    let record = read_test_file(&real[i], &shown, &plans[i], &source)?;
     Ok((info, record))
 }
 

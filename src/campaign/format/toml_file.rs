@@ -364,11 +364,14 @@ pub(super) fn check_test_file(
     ))
 }
 
+/// One `[[test]]` entry; `campaign_rate_hz` is the campaign's `sample_rate_hz`, the
+/// test's own (campaign-format.md, "campaign.toml additions") replaces it for the test's
+/// Nyquist checks.
 pub(super) fn read_test(
     lines: &Lines,
     raw: &Spanned<RawTable>,
     index: usize,
-    sample_rate_hz: f64,
+    campaign_rate_hz: f64,
 ) -> Result<(TestSpec, usize), CampaignError> {
     let off = raw.span().start;
     let t = raw.get_ref();
@@ -445,6 +448,7 @@ pub(super) fn read_test(
         frequency_hz: None,
         amplitude_m: None,
         controller: ControllerOverride::default(),
+        sample_rate_hz: None,
     };
     let optional = |key: &str, check: Bound| -> Result<Option<f64>, CampaignError> {
         lookup(t, key)
@@ -455,6 +459,9 @@ pub(super) fn read_test(
         Control::Displacement => DISPLACEMENT_M,
         Control::Acceleration => ACCELERATION_M_S2,
     };
+    // the test's own rate, checked like the campaign's; its Nyquist bounds the test
+    spec.sample_rate_hz = optional("sample_rate_hz", SAMPLE_RATE_HZ)?;
+    let sample_rate_hz = spec.sample_rate_hz.unwrap_or(campaign_rate_hz);
     spec.rms = optional("rms", level)?;
     spec.frequency_hz = optional("frequency_hz", TEST_FREQUENCY_HZ)?;
     spec.amplitude_m = optional("amplitude_m", DISPLACEMENT_M)?;
@@ -753,19 +760,8 @@ fn test_plan(
         ),
         None => (BTreeMap::new(), raw.span().start),
     };
-    if let Some(v) = lookup(t, "sample_rate_hz") {
-        let fs = number(lines, v, name, "sample_rate_hz", SAMPLE_RATE_HZ)?;
-        if fs != sample_rate_hz {
-            return Err(lines.err(
-                Some(v.span().start),
-                name,
-                Some("sample_rate_hz"),
-                format!(
-                    "{fs} Hz differs from the campaign's {sample_rate_hz} Hz: this version identifies tests of one sample rate together; put tests of another rate in a campaign of their own"
-                ),
-            ));
-        }
-    }
+    // the test's own rate was checked with the test ([`read_test`])
+    let own_rate_line = lookup(t, "sample_rate_hz").map(|v| lines.line(v.span().start));
     let columns = merge_columns(campaign_columns, &test_columns)
         .map_err(|m| lines.err(Some(columns_off), name, Some("columns"), m))?;
     Ok(ReadPlan {
@@ -774,7 +770,82 @@ fn test_plan(
             .merged(&test_read),
         columns,
         lab_form: false,
-        sample_rate_hz,
+        sample_rate_hz: spec.sample_rate_hz.unwrap_or(sample_rate_hz),
+        own_rate_line,
         control: spec.control,
     })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// A campaign at 512 Hz with a random test `A` and a sine `B`; `a` and `b` are added
+    /// to their entries.
+    fn toml(a: &str, b: &str) -> String {
+        format!(
+            "sample_rate_hz = 512.0\n\n[[test]]\nname = \"A\"\nfile = \"A.csv\"\nkind = \"random\"\n\
+             control = \"displacement\"\nrms = 0.001\nband_hz = [0.0, 100.0]\n{a}\n\n[[test]]\n\
+             name = \"B\"\nfile = \"B.csv\"\nkind = \"sine\"\ncontrol = \"displacement\"\n\
+             frequency_hz = 1.0\namplitude_m = 0.01\n{b}\n"
+        )
+    }
+
+    fn parse(text: &str) -> Result<(CampaignInfo, Vec<ReadPlan>), CampaignError> {
+        parse_campaign_toml_planned(text, "campaign.toml", "c").map(|(i, _, p)| (i, p))
+    }
+
+    #[test]
+    fn a_test_keeps_its_own_rate_and_its_plan_reads_at_it() {
+        let (info, plans) = parse(&toml("sample_rate_hz = 1000", "")).unwrap();
+        let (a, b) = (&info.tests[0], &info.tests[1]);
+        assert_eq!(a.sample_rate_hz, Some(1000.0));
+        assert_eq!(b.sample_rate_hz, None);
+        assert_eq!(info.sample_rate_for(a), 1000.0);
+        assert_eq!(info.sample_rate_for(b), 512.0);
+        assert_eq!(plans[0].sample_rate_hz, 1000.0);
+        assert_eq!(plans[0].own_rate_line, Some(10));
+        assert_eq!(
+            (plans[1].sample_rate_hz, plans[1].own_rate_line),
+            (512.0, None)
+        );
+    }
+
+    #[test]
+    fn a_bad_own_rate_names_line_test_and_key() {
+        for (bad, why) in [
+            ("0", "must be a finite number > 0"),
+            ("-1000.0", "must be a finite number > 0"),
+            ("nan", "must be finite"),
+            ("inf", "must be finite"),
+            ("1e9", "outside the plausible range"),
+            ("\"1 kHz\"", "expected a number"),
+        ] {
+            let e = parse(&toml("", &format!("sample_rate_hz = {bad}")))
+                .unwrap_err()
+                .to_string();
+            let want = "campaign.toml: line 19: test `B`: key `sample_rate_hz`: ";
+            assert!(e.starts_with(want) && e.contains(why), "{bad}: {e}");
+        }
+    }
+
+    #[test]
+    fn nyquist_checks_use_the_tests_own_rate() {
+        // 300 Hz is above 512 Hz's Nyquist but below 1 kHz's
+        let fast = "sample_rate_hz = 1000.0\nband_hz = [0.0, 300.0]";
+        let text = toml("", "").replace("band_hz = [0.0, 100.0]\n", "");
+        assert!(parse(&text.replace("rms = 0.001\n", &format!("rms = 0.001\n{fast}\n"))).is_ok());
+        let e = parse(&text.replace("rms = 0.001\n", "rms = 0.001\nband_hz = [0.0, 300.0]\n"))
+            .unwrap_err()
+            .to_string();
+        assert!(e.contains("Nyquist frequency 256 Hz"), "{e}");
+        // and a slower test is bounded by its own, lower Nyquist
+        let e = parse(&toml("", "sample_rate_hz = 1.5"))
+            .unwrap_err()
+            .to_string();
+        assert!(
+            e.contains("test `B`") && e.contains("Nyquist frequency 0.75 Hz"),
+            "{e}"
+        );
+    }
 }

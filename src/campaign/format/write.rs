@@ -155,6 +155,10 @@ pub fn campaign_toml_string(info: &CampaignInfo) -> String {
             Control::Acceleration => "acceleration",
         };
         s.push_str(&format!("kind = \"{kind}\"\ncontrol = \"{control}\"\n"));
+        // the test's own rate (campaign-format.md: a test may set its own)
+        if let Some(x) = t.sample_rate_hz {
+            s.push_str(&format!("sample_rate_hz = {}\n", toml_float(x)));
+        }
         if let Some(x) = t.rms {
             s.push_str(&format!("rms = {}\n", toml_float(x)));
         }

@@ -29,7 +29,7 @@ pub fn simulate_test_with(
     simulate_run_with(
         &Model::new(&q),
         &inputs[..end],
-        c.info.sample_rate_hz,
+        c.sample_rate_of(i),
         noise.map(|n| &n[..end.min(n.len())]),
         DIAGNOSIS_SUBSTEP_S,
         Checks::DivergenceOnly,

@@ -189,7 +189,7 @@ pub(super) fn test_scores_held(
             residual: [f64::INFINITY; 5],
         };
     }
-    scores(&c.records[i], &pred, noise, part, c.info.sample_rate_hz)
+    scores(&c.records[i], &pred, noise, part, c.sample_rate_of(i))
 }
 
 /// Sum over `tests` and channels of the squared predictive scores over `part`: the

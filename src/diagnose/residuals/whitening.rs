@@ -28,11 +28,12 @@ impl Whitening {
     /// From `p`'s prediction of `tests` over `part`.
     pub fn new(p: &Params, c: &Campaign, tests: &[usize], noise: &NoiseFloor, part: Part) -> Self {
         use rayon::prelude::*;
-        let fs = c.info.sample_rate_hz;
-        let bands = octave_bands(fs);
         let per: Vec<(usize, [Vec<f64>; 5])> = tests
             .par_iter()
             .map(|&i| {
+                // each test's octave bands at its own rate
+                let fs = c.sample_rate_of(i);
+                let bands = octave_bands(fs);
                 let r = &c.records[i];
                 let range = part.range(r.len());
                 let pred = predict(p, c, i, part.simulated(), noise);

@@ -77,7 +77,7 @@ pub fn simulate_prefix(
     let run = simulate_run_with(
         &Model::new(&q),
         &inputs,
-        c.info.sample_rate_hz,
+        c.sample_rate_of(i),
         None,
         DEFAULT_MAX_SUBSTEP_S,
         checks,

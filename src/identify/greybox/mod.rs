@@ -236,7 +236,8 @@ fn starting_points(p: &Params, c: &Campaign, estimation: &[usize], s: &Structure
     if !s.free.contains(&BulkModulus) {
         return bases;
     }
-    let oil = start::oil_column_starts(&reading, c.info.sample_rate_hz);
+    let rate = estimation.first().map_or(c.info.sample_rate_hz, |&i| c.sample_rate_of(i));
+    let oil = start::oil_column_starts(&reading, rate);
     bases
         .iter()
         .flat_map(|b| oil.iter().map(|&f| start::stable_oil_column(b, f)))
@@ -246,10 +247,10 @@ fn starting_points(p: &Params, c: &Campaign, estimation: &[usize], s: &Structure
 /// The residual targets of the estimation tests: every compared channel they recorded
 /// (the force only when the structure uses it), over `excerpt_s` seconds or the whole.
 fn targets(c: &Campaign, tests: &[usize], s: &Structure, excerpt_s: Option<f64>) -> Vec<Target> {
-    let fs = c.info.sample_rate_hz;
     let mut out = Vec::new();
     for &i in tests {
         let rec = &c.records[i];
+        let fs = c.sample_rate_of(i);
         let samples = excerpt_s.map_or(rec.len(), |t| ((t * fs) as usize).clamp(2, rec.len()));
         for m in COMPARED {
             if m == Measured::Force && !s.with_force {

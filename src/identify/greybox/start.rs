@@ -60,7 +60,7 @@ pub struct LoopReading {
 /// is too short for a spectral estimate or no coherent bin reaches the corner.
 pub fn read_loop(c: &Campaign, i: usize) -> Option<LoopReading> {
     let rec = &c.records[i];
-    let fs = c.info.sample_rate_hz;
+    let fs = c.sample_rate_of(i);
     let (input, output) = match (&rec.displacement_m, &rec.acceleration_m_s2) {
         (Some(x), _) if c.info.tests[i].control == Control::Displacement || rec.acceleration_m_s2.is_none() => {
             (&rec.ref_displacement_m, x)
