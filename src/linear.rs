@@ -268,25 +268,8 @@ impl Plant {
         let (mut lvdt_x, mut lvdt_v) = (rel_x.clone(), rel_v.clone());
         let mut table_mass = m;
         if let Some(r) = rod {
-            let c = p.free_play.contact();
-            table_mass = m - c.rod_mass_kg;
-            // contact force on the table k_c (x_r - x) + c_c (v_r - v)
-            let mut contact = DVector::zeros(n);
-            contact[r] = c.stiffness_n_m;
-            contact[x] = -c.stiffness_n_m;
-            contact[r + 1] = c.damping_n_s_m;
-            contact[v] = -c.damping_n_s_m;
-            // the actuator force drives the rod, the contact the table
-            table_force[pl] -= area;
-            table_force += &contact;
-            let mut rod_force = -contact;
-            rod_force[pl] += area;
-            a[(r, r + 1)] = 1.0;
-            a.set_row(r + 1, &(rod_force / c.rod_mass_kg).transpose());
-            lvdt_x[x] = 0.0;
-            lvdt_x[r] = 1.0;
-            lvdt_v[v] = 0.0;
-            lvdt_v[r + 1] = 1.0;
+            let rows = RodRows { x, v, pl, r, area };
+            table_mass = rows.add(p, &mut a, &mut table_force, &mut lvdt_x, &mut lvdt_v);
         }
         let accel = &table_force / table_mass;
         // flow continuity (spec section 4, ideal form)
@@ -336,6 +319,49 @@ impl Plant {
             Some(x) => (0..self.order()).map(|j| self.c[(row, j)] * x[j]).sum(),
             None => Complex64::new(f64::NAN, f64::NAN),
         }
+    }
+}
+
+/// Where the engaged free-play rod sits in the plant (spec section 7, second part): the
+/// table's position and velocity, the load pressure, the rod's first state, piston area.
+struct RodRows {
+    x: usize,
+    v: usize,
+    pl: usize,
+    r: usize,
+    area: f64,
+}
+
+impl RodRows {
+    /// Add the rod on its contact `k_c (x_r - x) + c_c (v_r - v)`: the actuator force
+    /// drives the rod, the contact the table; the LVDT rows read the rod. Returns the
+    /// table's own mass `M - m_r`.
+    fn add(
+        &self,
+        p: &Params,
+        a: &mut DMatrix<f64>,
+        table_force: &mut DVector<f64>,
+        lvdt_x: &mut DVector<f64>,
+        lvdt_v: &mut DVector<f64>,
+    ) -> f64 {
+        let (x, v, r) = (self.x, self.v, self.r);
+        let c = p.free_play.contact();
+        let mut contact = DVector::zeros(a.nrows());
+        contact[r] = c.stiffness_n_m;
+        contact[x] = -c.stiffness_n_m;
+        contact[r + 1] = c.damping_n_s_m;
+        contact[v] = -c.damping_n_s_m;
+        table_force[self.pl] -= self.area;
+        *table_force += &contact;
+        let mut rod_force = -contact;
+        rod_force[self.pl] += self.area;
+        a[(r, r + 1)] = 1.0;
+        a.set_row(r + 1, &(rod_force / c.rod_mass_kg).transpose());
+        lvdt_x[x] = 0.0;
+        lvdt_x[r] = 1.0;
+        lvdt_v[v] = 0.0;
+        lvdt_v[r + 1] = 1.0;
+        p.table.mass_kg - c.rod_mass_kg
     }
 }
 

@@ -405,7 +405,10 @@ fn two_mode_specimen_is_the_sum_of_its_modes() {
         let (h, a) = (lin.acceleration_to_force(f), analytic(f));
         assert!((h - a).norm() / a.norm() < 1e-6, "{f} Hz: {h} vs {a}");
     }
-    let mag: Vec<f64> = grid.iter().map(|&f| lin.acceleration_to_force(f).norm()).collect();
+    let mag: Vec<f64> = grid
+        .iter()
+        .map(|&f| lin.acceleration_to_force(f).norm())
+        .collect();
     let peak1 = extremum(&grid, &mag, 2.0, 12.0, true);
     let notch1 = extremum(&grid, &mag, peak1, 15.0, false);
     let peak2 = extremum(&grid, &mag, 15.0, 25.0, true);
@@ -421,7 +424,11 @@ fn two_mode_specimen_is_the_sum_of_its_modes() {
     let root = |mut lo: f64, mut hi: f64| {
         for _ in 0..60 {
             let mid = 0.5 * (lo + hi);
-            if undamped(mid) > 0.0 { hi = mid } else { lo = mid }
+            if undamped(mid) > 0.0 {
+                hi = mid
+            } else {
+                lo = mid
+            }
         }
         0.5 * (lo + hi)
     };
@@ -429,14 +436,23 @@ fn two_mode_specimen_is_the_sum_of_its_modes() {
     eprintln!("two modes: peaks {peak1} {peak2} Hz, notches {notch1} {notch2} Hz (expected {anti1:.3} {anti2:.3})");
     // the other mode's and the table's terms move each extremum a little off the modal
     // frequency; friction's pre-sliding stiffness lifts the anti-resonances (as for one mode)
-    assert!((peak1 - 6.0).abs() <= 0.1 && (peak2 - 21.0).abs() <= 0.2, "{peak1} {peak2}");
-    assert!((notch1 - anti1).abs() <= 0.2 && (notch2 - anti2).abs() <= 0.2, "{notch1} {notch2}");
+    assert!(
+        (peak1 - 6.0).abs() <= 0.1 && (peak2 - 21.0).abs() <= 0.2,
+        "{peak1} {peak2}"
+    );
+    assert!(
+        (notch1 - anti1).abs() <= 0.2 && (notch2 - anti2).abs() <= 0.2,
+        "{notch1} {notch2}"
+    );
     // the simulated random test shows both resonances
     let (f, m) = apparent_mass(&p);
     let sim1 = extremum(&f, &m, 2.0, 12.0, true);
     let sim2 = extremum(&f, &m, 15.0, 25.0, true);
     eprintln!("two modes simulated: resonances {sim1} {sim2} Hz");
-    assert!((sim1 - 6.0).abs() <= 0.25 && (sim2 - 21.0).abs() <= 0.25, "{sim1} {sim2}");
+    assert!(
+        (sim1 - 6.0).abs() <= 0.25 && (sim2 - 21.0).abs() <= 0.25,
+        "{sim1} {sim2}"
+    );
 }
 
 /// Absent higher modes (mass 0, whatever their other values) change nothing: the
@@ -491,14 +507,25 @@ fn free_play_without_gap_follows_the_rod() {
     let bare = run(&Params::trees_lab(), &inputs);
     let dmax = max_abs(bare.iter().map(|o| o.displacement_m));
     let amax = max_abs(bare.iter().map(|o| o.acceleration_m_s2));
-    let ddev = max_abs(out.iter().zip(&bare).map(|(a, b)| a.displacement_m - b.displacement_m));
-    let adev = max_abs(out.iter().zip(&bare).map(|(a, b)| a.acceleration_m_s2 - b.acceleration_m_s2));
+    let ddev = max_abs(
+        out.iter()
+            .zip(&bare)
+            .map(|(a, b)| a.displacement_m - b.displacement_m),
+    );
+    let adev = max_abs(
+        out.iter()
+            .zip(&bare)
+            .map(|(a, b)| a.acceleration_m_s2 - b.acceleration_m_s2),
+    );
     let rms = |x: &mut dyn Iterator<Item = f64>| {
         let v: Vec<f64> = x.collect();
         (v.iter().map(|y| y * y).sum::<f64>() / v.len() as f64).sqrt()
     };
     let arms = rms(&mut bare.iter().map(|o| o.acceleration_m_s2));
-    let adev_rms = rms(&mut out.iter().zip(&bare).map(|(a, b)| a.acceleration_m_s2 - b.acceleration_m_s2));
+    let adev_rms = rms(&mut out
+        .iter()
+        .zip(&bare)
+        .map(|(a, b)| a.acceleration_m_s2 - b.acceleration_m_s2));
     let gap = max_abs(contact.iter().map(|c| c.0));
     eprintln!(
         "no gap: displacement dev {ddev:.2e} of {dmax:.3}, acceleration dev {adev:.3} of \
@@ -511,15 +538,24 @@ fn free_play_without_gap_follows_the_rod() {
     // the contact deflection is the force over k_c: 0.24 MN / 1e10 N/m = 24 um
     assert!(gap < 3e-5, "{gap}");
     // and the no-gap linearisation is close to the baseline's
-    let (lin, base) = (Linearisation::new(&p), Linearisation::new(&Params::trees_lab()));
+    let (lin, base) = (
+        Linearisation::new(&p),
+        Linearisation::new(&Params::trees_lab()),
+    );
     // (below the oil-column peak; the peak and above move with its frequency)
     for f in [1.0, 5.0, 10.0] {
         let (h, h0) = (lin.table_tf(f), base.table_tf(f));
         assert!((h - h0).norm() < 0.05 * h0.norm(), "{f} Hz: {h} vs {h0}");
     }
     // the contact in series with the oil column lowers its peak a little (k_c = 30 k_oil)
-    let (fig, fig0) = (lin.table_tf_figures().unwrap(), base.table_tf_figures().unwrap());
-    eprintln!("no gap: oil-column peak {:.2} Hz (bare {:.2} Hz)", fig.peak_hz, fig0.peak_hz);
+    let (fig, fig0) = (
+        lin.table_tf_figures().unwrap(),
+        base.table_tf_figures().unwrap(),
+    );
+    eprintln!(
+        "no gap: oil-column peak {:.2} Hz (bare {:.2} Hz)",
+        fig.peak_hz, fig0.peak_hz
+    );
     assert!(fig.peak_hz < fig0.peak_hz && fig0.peak_hz - fig.peak_hz < 0.4);
     assert!(lin.plant.names.contains(&"rod_x"));
 }
@@ -566,7 +602,11 @@ fn free_play_gap_shows_at_reversals_and_never_pulls() {
     let v_max = max_abs(out.iter().map(|o| o.velocity_m_s));
     for (o, &(d, _)) in out.iter().zip(&contact).skip((3.0 * FS) as usize) {
         if o.velocity_m_s.abs() > 0.8 * v_max {
-            assert!(d * o.velocity_m_s > 0.0, "mid-stroke: d {d} at velocity {}", o.velocity_m_s);
+            assert!(
+                d * o.velocity_m_s > 0.0,
+                "mid-stroke: d {d} at velocity {}",
+                o.velocity_m_s
+            );
         }
     }
     for &(d, f) in &contact {
@@ -579,7 +619,10 @@ fn free_play_gap_shows_at_reversals_and_never_pulls() {
     // the linearisation joins rod and table rigidly and says so
     let lin = Linearisation::new(&p);
     assert!(lin.notes.iter().any(|n| n.contains("free_play")));
-    assert_eq!(lin.plant.order(), Linearisation::new(&Params::trees_lab()).plant.order());
+    assert_eq!(
+        lin.plant.order(),
+        Linearisation::new(&Params::trees_lab()).plant.order()
+    );
 }
 
 /// The contact's damping dissipates energy: a rod striking a free table rebounds with its
@@ -616,7 +659,9 @@ fn free_play_contact_damping_dissipates_energy() {
             let k2 = rate(&step(&k1, h / 2.0));
             let k3 = rate(&step(&k2, h / 2.0));
             let k4 = rate(&step(&k3, h));
-            s = std::array::from_fn(|i| s[i] + h / 6.0 * (k1[i] + 2.0 * k2[i] + 2.0 * k3[i] + k4[i]));
+            s = std::array::from_fn(|i| {
+                s[i] + h / 6.0 * (k1[i] + 2.0 * k2[i] + 2.0 * k3[i] + k4[i])
+            });
         }
         // separated again: the rod behind the table
         assert!(s[1] < s[3], "{s:?}");

@@ -110,7 +110,11 @@ macro_rules! parameter {
         $crate::effects::Parameter {
             key: concat!(stringify!($sub), ".", stringify!($field)),
             dotted_key: concat!(
-                stringify!($block), ".", stringify!($sub), ".", stringify!($field)
+                stringify!($block),
+                ".",
+                stringify!($sub),
+                ".",
+                stringify!($field)
             ),
             fmu_name: $fmu,
             value_reference: $vr,

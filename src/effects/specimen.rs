@@ -116,7 +116,11 @@ impl Specimen {
     /// The modes that exist, mode 1 first (1 to [`MAX_MODES`] of them).
     pub fn modes(&self) -> Vec<SpecimenMode> {
         let mut modes = vec![self.mode1()];
-        modes.extend([self.mode2, self.mode3].into_iter().filter(|m| m.mass_kg > 0.0));
+        modes.extend(
+            [self.mode2, self.mode3]
+                .into_iter()
+                .filter(|m| m.mass_kg > 0.0),
+        );
         modes
     }
 }

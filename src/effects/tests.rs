@@ -179,53 +179,97 @@ fn specimen_modes_reach_the_parameter_file_and_come_back() {
 
 #[test]
 fn specimen_modes_are_checked_with_their_keys() {
-    let bad = |text: &str| Params::from_toml_str(text, "t.toml").unwrap_err().to_string();
+    let bad = |text: &str| {
+        Params::from_toml_str(text, "t.toml")
+            .unwrap_err()
+            .to_string()
+    };
     let list = |entries: &str| format!("[specimen]\nenabled = true\nmodes = [{entries}]\n");
     let m = |mass: f64, f: f64| {
         format!("{{ mass_kg = {mass:?}, frequency_hz = {f:?}, damping_ratio = 0.02 }}")
     };
     // the list alone gives mode 1
-    let p = Params::from_toml_str(&list(&[m(9000.0, 4.0), m(3000.0, 11.0)].join(", ")), "t")
-        .unwrap();
-    assert_eq!((p.specimen.mass_kg, p.specimen.mode2.frequency_hz), (9000.0, 11.0));
+    let p =
+        Params::from_toml_str(&list(&[m(9000.0, 4.0), m(3000.0, 11.0)].join(", ")), "t").unwrap();
+    assert_eq!(
+        (p.specimen.mass_kg, p.specimen.mode2.frequency_hz),
+        (9000.0, 11.0)
+    );
     let four = [m(1.0, 1.0), m(1.0, 2.0), m(1.0, 3.0), m(1.0, 4.0)].join(", ");
     assert!(bad(&list(&four)).contains("at most 3") || bad(&list(&four)).contains("1 to 3"));
     let e = bad(&list(&[m(9000.0, 4.0), m(0.0, 11.0)].join(", ")));
-    assert!(e.contains("specimen.mode2.mass_kg") && e.contains("> 0"), "{e}");
+    assert!(
+        e.contains("specimen.mode2.mass_kg") && e.contains("> 0"),
+        "{e}"
+    );
     let e = bad(&list(&[m(9000.0, 4.0), m(3000.0, -1.0)].join(", ")));
-    assert!(e.contains("specimen.mode2.frequency_hz") && e.contains("> 0"), "{e}");
+    assert!(
+        e.contains("specimen.mode2.frequency_hz") && e.contains("> 0"),
+        "{e}"
+    );
     let e = bad(&format!("{}mass_kg = 8000.0\n", list(&m(9000.0, 4.0))));
-    assert!(e.contains("specimen.mass_kg") && e.contains("first mode"), "{e}");
+    assert!(
+        e.contains("specimen.mass_kg") && e.contains("first mode"),
+        "{e}"
+    );
     let e = bad("[specimen]\nenabled = true\n[specimen.mode2]\nmass_kg = 1.0\n");
     assert!(e.contains("mode2"), "{e}");
     // --effect: a mode needs its mass, mode 3 needs mode 2
     let mut p = Params::trees_lab();
-    let e = p.apply_effect_spec("specimen:mode2.frequency_hz=12").unwrap_err();
+    let e = p
+        .apply_effect_spec("specimen:mode2.frequency_hz=12")
+        .unwrap_err();
     assert!(e.contains("specimen.mode2.mass_kg"), "{e}");
-    let e = p.apply_effect_spec("specimen:mode3.mass_kg=100").unwrap_err();
-    assert!(e.contains("specimen.mode3.mass_kg") && e.contains("mode2"), "{e}");
-    let e = p.apply_effect_spec("specimen:mode2.mass_kg=100,mode2.damping_ratio=-1").unwrap_err();
-    assert!(e.contains("specimen.mode2.damping_ratio") && e.contains(">= 0"), "{e}");
+    let e = p
+        .apply_effect_spec("specimen:mode3.mass_kg=100")
+        .unwrap_err();
+    assert!(
+        e.contains("specimen.mode3.mass_kg") && e.contains("mode2"),
+        "{e}"
+    );
+    let e = p
+        .apply_effect_spec("specimen:mode2.mass_kg=100,mode2.damping_ratio=-1")
+        .unwrap_err();
+    assert!(
+        e.contains("specimen.mode2.damping_ratio") && e.contains(">= 0"),
+        "{e}"
+    );
 }
 
 #[test]
 fn free_play_is_validated_with_its_keys() {
     let mut p = Params::trees_lab();
-    p.apply_effect_spec("free_play:gap_m=0.001,rod_mass_kg=900").unwrap();
+    p.apply_effect_spec("free_play:gap_m=0.001,rod_mass_kg=900")
+        .unwrap();
     assert_eq!((p.free_play.gap_m, p.free_play.rod_mass_kg), (0.001, 900.0));
     for (spec, key, rule) in [
         ("free_play:gap_m=-0.001", "free_play.gap_m", ">= 0"),
         ("free_play:rod_mass_kg=0", "free_play.rod_mass_kg", "> 0"),
-        ("free_play:rod_mass_kg=41258", "free_play.rod_mass_kg", "table.mass_kg"),
-        ("free_play:contact_stiffness_n_m=0", "free_play.contact_stiffness_n_m", "> 0"),
-        ("free_play:contact_damping_ratio=-0.1", "free_play.contact_damping_ratio", ">= 0"),
+        (
+            "free_play:rod_mass_kg=41258",
+            "free_play.rod_mass_kg",
+            "table.mass_kg",
+        ),
+        (
+            "free_play:contact_stiffness_n_m=0",
+            "free_play.contact_stiffness_n_m",
+            "> 0",
+        ),
+        (
+            "free_play:contact_damping_ratio=-0.1",
+            "free_play.contact_damping_ratio",
+            ">= 0",
+        ),
     ] {
         let e = Params::trees_lab().apply_effect_spec(spec).unwrap_err();
         assert!(e.contains(key) && e.contains(rule), "{spec}: {e}");
     }
     // the help names the new keys and the modes' syntax
     let help = effect_syntax_help();
-    assert!(help.contains("free_play: gap_m (m, default 0.0002)"), "{help}");
+    assert!(
+        help.contains("free_play: gap_m (m, default 0.0002)"),
+        "{help}"
+    );
     assert!(help.contains("mode2.mass_kg (kg, default 0)"), "{help}");
     assert!(help.contains("mode 3 needs mode 2"), "{help}");
 }

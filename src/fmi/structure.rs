@@ -52,8 +52,8 @@ fn operating_point(m: &Model) -> [f64; NX] {
     // the free-play rod 0.3 mm ahead of the table and closing: past the default 0.1-mm
     // half gap, its contact pushing
     let generic = [
-        0.02, 0.3, 2e5, -1e5, 0.011, 0.004, 0.4, 0.012, 0.14, 1e-4, 1e-3, 0.013, 0.12, 0.014,
-        0.11, 0.0113, 0.0045,
+        0.02, 0.3, 2e5, -1e5, 0.011, 0.004, 0.4, 0.012, 0.14, 1e-4, 1e-3, 0.013, 0.12, 0.014, 0.11,
+        0.0113, 0.0045,
     ];
     for (x, g) in s.iter_mut().zip(generic) {
         *x += g;

@@ -291,7 +291,11 @@ impl Model {
         // friction (eq. 4.15) on the stroke velocity
         ds[ix::Z] = self.friction.z_rate(s[ix::Z], alg.v_rel);
         // specimen (section 7): each mode on the table
-        let modes = [&self.specimen, &self.specimen_modes[0], &self.specimen_modes[1]];
+        let modes = [
+            &self.specimen,
+            &self.specimen_modes[0],
+            &self.specimen_modes[1],
+        ];
         for (m, &(xi, vi)) in modes.into_iter().zip(&ix::SPECIMEN_MODES) {
             if m.enabled {
                 ds[xi] = s[vi];
