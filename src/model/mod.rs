@@ -89,9 +89,11 @@ pub struct Inputs {
 pub struct Outputs {
     pub valve_command: f64,
     pub spool_position: f64,
-    /// LVDT displacement relative to the reaction mass, m.
+    /// LVDT displacement relative to the reaction mass, m (with `free_play` the LVDT is
+    /// on the actuator rod, spec section 7).
     pub displacement_m: f64,
-    /// Table velocity relative to the reaction mass, m/s.
+    /// Table velocity relative to the reaction mass, m/s (with `free_play` the rod's, the
+    /// derivative of the LVDT channel).
     pub velocity_m_s: f64,
     /// Absolute table acceleration, m/s^2.
     pub acceleration_m_s2: f64,
