@@ -11,6 +11,9 @@
 //!
 //! `flow_saturation` and `valve_deadband` are amplitude nonlinearities with no
 //! small-signal meaning at rest; [`Linearisation::notes`] says so when they are enabled.
+//! Each specimen mode adds its oscillator (spec section 7, second part). `free_play` with
+//! no gap is linearised with its contact engaged; with a gap the rod rests inside it
+//! where the small-signal model is not defined, and rod and table are joined rigidly.
 
 use crate::model::{ix, Inputs, Model, Reference, SensorNoise, NX};
 use crate::params::{ActuatorModel, Params, ServovalveModel};
@@ -37,8 +40,8 @@ pub mod meas {
 
 /// The open-loop plant from spool position (and external force) to the measurements:
 /// `X' = a X + b_spool x_v + b_external F_ext`, `y = c X`.
-/// States (enabled blocks only): `P_L, x, v, Z`, then `x_s, v_s` (specimen), then
-/// `x_f, v_f` (foundation).
+/// States (enabled blocks only): `P_L, x, v, Z`, then `x_s, v_s` of each specimen mode,
+/// then `x_f, v_f` (foundation), then `x_r, v_r` (free-play rod with no gap).
 #[derive(Debug, Clone)]
 pub struct Plant {
     pub a: DMatrix<f64>,
@@ -201,13 +204,23 @@ impl Plant {
                 1.0
             };
         let mut names = vec!["pressure_load", "table_x", "table_v", "friction_z"];
-        let spec = p.specimen.enabled.then(|| names.len());
-        if spec.is_some() {
-            names.extend(["specimen_x", "specimen_v"]);
+        // one (x, v) pair per present specimen mode: (mode, first state index)
+        let mut modes = Vec::new();
+        for (k, mode) in p.specimen.modes().into_iter().enumerate() {
+            if p.specimen.enabled {
+                modes.push((mode, names.len()));
+                names.extend(SPECIMEN_STATE_NAMES[k]);
+            }
         }
         let fnd = p.foundation.enabled.then(|| names.len());
         if fnd.is_some() {
             names.extend(["foundation_x", "foundation_v"]);
+        }
+        // free play: the contact linearised as engaged when the gap is 0; with a gap the
+        // rod rests inside it and the small-signal model joins rod and table rigidly
+        let rod = engaged_free_play(p).then(|| names.len());
+        if rod.is_some() {
+            names.extend(["rod_x", "rod_v"]);
         }
         let n = names.len();
         let (pl, x, v, z) = (0, 1, 2, 3);
@@ -228,10 +241,10 @@ impl Plant {
         // net force on the table (spec section 5)
         let mut table_force = stroke_force.clone();
         let mut a = DMatrix::zeros(n, n);
-        if let Some(s) = spec {
-            let w = 2.0 * PI * p.specimen.frequency_hz;
-            let ks = p.specimen.mass_kg * w * w;
-            let cs = 2.0 * p.specimen.damping_ratio * p.specimen.mass_kg * w;
+        for (mode, s) in modes {
+            let w = 2.0 * PI * mode.frequency_hz;
+            let ks = mode.mass_kg * w * w;
+            let cs = 2.0 * mode.damping_ratio * mode.mass_kg * w;
             // spring-damper force on the specimen: -k_s (x_s - x) - c_s (v_s - v)
             let mut on_specimen = DVector::zeros(n);
             on_specimen[s] = -ks;
@@ -240,7 +253,7 @@ impl Plant {
             on_specimen[v] = cs;
             table_force -= &on_specimen;
             a[(s, s + 1)] = 1.0;
-            a.set_row(s + 1, &(on_specimen / p.specimen.mass_kg).transpose());
+            a.set_row(s + 1, &(on_specimen / mode.mass_kg).transpose());
         }
         if let Some(f) = fnd {
             let w = 2.0 * PI * p.foundation.frequency_hz;
@@ -251,9 +264,16 @@ impl Plant {
             a[(f, f + 1)] = 1.0;
             a.set_row(f + 1, &(row / mf).transpose());
         }
-        let accel = &table_force / m;
+        // the LVDT and the flow follow the piston: the rod's with engaged free play
+        let (mut lvdt_x, mut lvdt_v) = (rel_x.clone(), rel_v.clone());
+        let mut table_mass = m;
+        if let Some(r) = rod {
+            let rows = RodRows { x, v, pl, r, area };
+            table_mass = rows.add(p, &mut a, &mut table_force, &mut lvdt_x, &mut lvdt_v);
+        }
+        let accel = &table_force / table_mass;
         // flow continuity (spec section 4, ideal form)
-        let mut pl_row = -&rel_v * (rate * area);
+        let mut pl_row = -&lvdt_v * (rate * area);
         pl_row[pl] -= rate * act.leakage_m3_s_pa;
         a.set_row(pl, &pl_row.transpose());
         a[(x, v)] = 1.0;
@@ -263,10 +283,10 @@ impl Plant {
         let mut b_spool = DVector::zeros(n);
         b_spool[pl] = rate * act.flow_gain_m3_s;
         let mut b_external = DVector::zeros(n);
-        b_external[v] = 1.0 / m;
+        b_external[v] = 1.0 / table_mass;
         let mut c = DMatrix::zeros(4, n);
-        c.set_row(meas::DISPLACEMENT, &rel_x.transpose());
-        c.set_row(meas::VELOCITY, &rel_v.transpose());
+        c.set_row(meas::DISPLACEMENT, &lvdt_x.transpose());
+        c.set_row(meas::VELOCITY, &lvdt_v.transpose());
         c.set_row(meas::ACCELERATION, &accel.transpose());
         c[(meas::FORCE, pl)] = area;
         Plant {
@@ -302,6 +322,63 @@ impl Plant {
     }
 }
 
+/// Where the engaged free-play rod sits in the plant (spec section 7, second part): the
+/// table's position and velocity, the load pressure, the rod's first state, piston area.
+struct RodRows {
+    x: usize,
+    v: usize,
+    pl: usize,
+    r: usize,
+    area: f64,
+}
+
+impl RodRows {
+    /// Add the rod on its contact `k_c (x_r - x) + c_c (v_r - v)`: the actuator force
+    /// drives the rod, the contact the table; the LVDT rows read the rod. Returns the
+    /// table's own mass `M - m_r`.
+    fn add(
+        &self,
+        p: &Params,
+        a: &mut DMatrix<f64>,
+        table_force: &mut DVector<f64>,
+        lvdt_x: &mut DVector<f64>,
+        lvdt_v: &mut DVector<f64>,
+    ) -> f64 {
+        let (x, v, r) = (self.x, self.v, self.r);
+        let c = p.free_play.contact();
+        let mut contact = DVector::zeros(a.nrows());
+        contact[r] = c.stiffness_n_m;
+        contact[x] = -c.stiffness_n_m;
+        contact[r + 1] = c.damping_n_s_m;
+        contact[v] = -c.damping_n_s_m;
+        table_force[self.pl] -= self.area;
+        *table_force += &contact;
+        let mut rod_force = -contact;
+        rod_force[self.pl] += self.area;
+        a[(r, r + 1)] = 1.0;
+        a.set_row(r + 1, &(rod_force / c.rod_mass_kg).transpose());
+        lvdt_x[x] = 0.0;
+        lvdt_x[r] = 1.0;
+        lvdt_v[v] = 0.0;
+        lvdt_v[r + 1] = 1.0;
+        p.table.mass_kg - c.rod_mass_kg
+    }
+}
+
+/// State names of the specimen's modes in [`Plant::names`], mode 1 first.
+const SPECIMEN_STATE_NAMES: [[&str; 2]; 3] = [
+    ["specimen_x", "specimen_v"],
+    ["specimen2_x", "specimen2_v"],
+    ["specimen3_x", "specimen3_v"],
+];
+
+/// Whether the plant holds the free-play rod: the effect on with no gap, so the contact
+/// is engaged at rest (spec section 7; with a gap the linearisation at rest is not
+/// defined and rod and table are joined rigidly, see [`Linearisation::notes`]).
+pub fn engaged_free_play(p: &Params) -> bool {
+    p.free_play.enabled && p.free_play.gap_m == 0.0
+}
+
 fn jw(f_hz: f64) -> Complex64 {
     Complex64::new(0.0, 2.0 * PI * f_hz)
 }
@@ -319,6 +396,13 @@ impl Linearisation {
             notes.push(
                 "valve_deadband: at rest the flow gain is zero; the small-signal model uses the flow gain outside the band".into(),
             );
+        }
+        if p.free_play.enabled {
+            notes.push(if engaged_free_play(p) {
+                "free_play with no gap: the contact is linearised as engaged (a spring and damper between rod and table)".into()
+            } else {
+                "free_play: at rest the rod sits inside the gap, where the linearisation is not defined; the small-signal model joins rod and table rigidly (the baseline's moving mass M)".into()
+            });
         }
         if p.actuator.model == ActuatorModel::Nonlinear {
             notes.push("nonlinear actuator linearised at rest: identical to the ideal one (spec section 4)".into());
@@ -615,11 +699,16 @@ pub enum LinearError {
         "the delay servovalve has no finite state: linearise with a first- or second-order valve"
     )]
     DelayValve,
+    #[error(
+        "free play switches at rest (its contact engages there), so the derivative function \
+         has no Jacobian there; the analytic plant linearises it (spec section 7)"
+    )]
+    FreePlay,
 }
 
 /// Central-difference Jacobian of the simulator's derivative function at rest, in the
 /// coordinates of [`Linearisation::closed_loop_matrices`]: `[valve states, P_L, x, v, Z,
-/// (x_s, v_s), (x_f, v_f)]`, inputs `[r, r', r'']`. For the nonlinear actuator the load
+/// (x_s, v_s) per specimen mode, (x_f, v_f)]`, inputs `[r, r', r'']`. For the nonlinear actuator the load
 /// pressure direction is `(P_a, P_b) += (+d/2, -d/2)` and its rate `P_a' - P_b'`.
 pub fn jacobian_at_rest(model: &Model) -> Result<(DMatrix<f64>, DMatrix<f64>), LinearError> {
     let p = &model.params;
@@ -633,6 +722,7 @@ pub fn jacobian_at_rest(model: &Model) -> Result<(DMatrix<f64>, DMatrix<f64>), L
     };
     match p.servovalve.model {
         ServovalveModel::Delay => return Err(LinearError::DelayValve),
+        _ if p.free_play.enabled => return Err(LinearError::FreePlay),
         ServovalveModel::FirstOrder => dirs.push((unit(ix::XV), 1e-6)),
         ServovalveModel::SecondOrder => {
             dirs.push((unit(ix::XV), 1e-6));
@@ -651,8 +741,11 @@ pub fn jacobian_at_rest(model: &Model) -> Result<(DMatrix<f64>, DMatrix<f64>), L
     dirs.push((unit(ix::V), 1e-7));
     dirs.push((unit(ix::Z), 1e-6));
     if p.specimen.enabled {
-        dirs.push((unit(ix::XS), 1e-7));
-        dirs.push((unit(ix::VS), 1e-7));
+        let present = p.specimen.modes().len();
+        for &(xs, vs) in &ix::SPECIMEN_MODES[..present] {
+            dirs.push((unit(xs), 1e-7));
+            dirs.push((unit(vs), 1e-7));
+        }
     }
     if p.foundation.enabled {
         dirs.push((unit(ix::XF), 1e-7));

@@ -213,6 +213,7 @@ impl Default for Friction {
 pub use crate::effects::flow_asymmetry::FlowAsymmetry;
 pub use crate::effects::flow_saturation::FlowSaturation;
 pub use crate::effects::foundation::Foundation;
+pub use crate::effects::free_play::FreePlay;
 pub use crate::effects::friction_asymmetry::FrictionAsymmetry;
 pub use crate::effects::specimen::Specimen;
 pub use crate::effects::stick_slip::StickSlip;
@@ -257,6 +258,7 @@ pub struct Params {
     pub valve_deadband: ValveDeadband,
     pub friction_asymmetry: FrictionAsymmetry,
     pub flow_asymmetry: FlowAsymmetry,
+    pub free_play: FreePlay,
     pub limits: Limits,
 }
 
@@ -327,13 +329,19 @@ impl Params {
             rules.push((key, values[key], rule));
         }
         for effect in CATALOGUE.iter().filter(|e| e.is_enabled(self)) {
-            for q in effect.parameters {
+            for q in effect.all_parameters() {
                 rules.push((q.dotted_key, (q.read)(self), q.rule));
             }
         }
         for (key, value, rule) in rules {
             if let Some(text) = rule.broken_by(value) {
                 return Err(invalid(file, key, value, &text));
+            }
+        }
+        // rules across parameters, once each parameter keeps its own
+        for effect in CATALOGUE.iter().filter(|e| e.is_enabled(self)) {
+            if let Some(b) = effect.cross_check.and_then(|check| check(self)) {
+                return Err(invalid(file, b.key, b.value, &b.rule));
             }
         }
         Ok(())
@@ -371,7 +379,7 @@ impl Params {
             ("friction.shape", self.friction.shape),
         ];
         for effect in &CATALOGUE {
-            for q in effect.parameters {
+            for q in effect.all_parameters() {
                 entries.push((q.dotted_key, (q.read)(self)));
             }
         }
@@ -458,7 +466,7 @@ pub fn fmu_rule_of(key: &str) -> Option<Rule> {
         .chain(
             CATALOGUE
                 .iter()
-                .flat_map(|e| e.parameters.iter().map(|q| (q.dotted_key, q.rule))),
+                .flat_map(|e| e.all_parameters().map(|q| (q.dotted_key, q.rule))),
         )
         .filter(|&(k, _)| k == key)
         .map(|(_, r)| r)

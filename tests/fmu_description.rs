@@ -71,3 +71,32 @@ fn required_variables_exist() {
         assert!(has(n, |r| matches!(r, Role::Parameter(..))), "{n}");
     }
 }
+
+/// The catalogue's second part in the FMU (spec section 7): the specimen's modes 2 and 3,
+/// free play, their states, and the free-play contact's event indicator.
+#[test]
+fn specimen_modes_and_free_play_are_variables() {
+    let has = |name: &str| VARIABLES.iter().any(|v| v.name == name);
+    for n in [
+        "specimen.mass",
+        "specimen.mode2.mass",
+        "specimen.mode2.frequency",
+        "specimen.mode2.damping_ratio",
+        "specimen.mode3.mass",
+        "specimen.mode3.frequency",
+        "specimen.mode3.damping_ratio",
+        "free_play.enabled",
+        "free_play.gap",
+        "free_play.rod_mass",
+        "free_play.contact_stiffness",
+        "free_play.contact_damping_ratio",
+        "state.specimen_mode2_displacement",
+        "state.specimen_mode3_velocity",
+        "state.rod_displacement",
+        "der(state.rod_velocity)",
+    ] {
+        assert!(has(n), "{n}");
+    }
+    let xml = model_description_xml(&Params::trees_lab());
+    assert!(xml.contains("numberOfEventIndicators=\"10\""));
+}

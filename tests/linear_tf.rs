@@ -104,6 +104,9 @@ fn nonlinear_actuator_linearises_to_the_ideal_one() {
     for valve in [ServovalveModel::FirstOrder, ServovalveModel::SecondOrder] {
         let mut p = with_valve(valve);
         p.specimen.enabled = true;
+        // three specimen modes (spec section 7, second part)
+        p.specimen.mode2.mass_kg = 4000.0;
+        p.specimen.mode3.mass_kg = 1500.0;
         p.foundation.enabled = true;
         p.stick_slip.enabled = true;
         p.table.stiffness_n_m = 2e5;

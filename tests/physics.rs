@@ -373,3 +373,302 @@ fn flow_asymmetry_scales_the_flow_by_the_spool_sign() {
         );
     }
 }
+
+/// A specimen with two modes (spec section 7, second part) makes the apparent mass
+/// `M + sum_k m_k T_k(s)`, `T_k = (c_k s + k_k)/(m_k s^2 + c_k s + k_k)`, plus the
+/// friction's pre-sliding stiffness `F_mu/(Y s^2)`: the analytic FRF is that sum, with a
+/// resonance at each mode and an anti-resonance above each; the simulated data show both
+/// resonances.
+#[test]
+fn two_mode_specimen_is_the_sum_of_its_modes() {
+    let mut p = Params::trees_lab();
+    p.apply_effect_spec(
+        "specimen:mass_kg=15000,frequency_hz=6,damping_ratio=0.02,\
+         mode2.mass_kg=6000,mode2.frequency_hz=21,mode2.damping_ratio=0.02",
+    )
+    .unwrap();
+    let lin = Linearisation::new(&p);
+    let w_of = |f: f64| 2.0 * std::f64::consts::PI * f;
+    let modes = [(15_000.0, 6.0, 0.02), (6000.0, 21.0, 0.02)];
+    let analytic = |f: f64| {
+        let s = num_complex::Complex64::new(0.0, w_of(f));
+        let mut m = num_complex::Complex64::new(p.table.mass_kg, 0.0)
+            + p.friction.force_n / p.friction.yield_displacement_m / (s * s);
+        for (mk, fk, zk) in modes {
+            let (k, c) = (mk * w_of(fk).powi(2), 2.0 * zk * mk * w_of(fk));
+            m += mk * (c * s + k) / (mk * s * s + c * s + k);
+        }
+        m
+    };
+    let grid = shaketable::linear::linear_grid(2.0, 30.0, 0.01);
+    for &f in &grid {
+        let (h, a) = (lin.acceleration_to_force(f), analytic(f));
+        assert!((h - a).norm() / a.norm() < 1e-6, "{f} Hz: {h} vs {a}");
+    }
+    let mag: Vec<f64> = grid
+        .iter()
+        .map(|&f| lin.acceleration_to_force(f).norm())
+        .collect();
+    let peak1 = extremum(&grid, &mag, 2.0, 12.0, true);
+    let notch1 = extremum(&grid, &mag, peak1, 15.0, false);
+    let peak2 = extremum(&grid, &mag, 15.0, 25.0, true);
+    let notch2 = extremum(&grid, &mag, peak2, 30.0, false);
+    // undamped anti-resonances: M + sum m_k w_k^2/(w_k^2 - w^2) = 0 (friction ignored)
+    let undamped = |f: f64| {
+        p.table.mass_kg
+            + modes
+                .iter()
+                .map(|&(mk, fk, _)| mk * fk * fk / (fk * fk - f * f))
+                .sum::<f64>()
+    };
+    let root = |mut lo: f64, mut hi: f64| {
+        for _ in 0..60 {
+            let mid = 0.5 * (lo + hi);
+            if undamped(mid) > 0.0 {
+                hi = mid
+            } else {
+                lo = mid
+            }
+        }
+        0.5 * (lo + hi)
+    };
+    let (anti1, anti2) = (root(6.001, 20.999), root(21.001, 60.0));
+    eprintln!("two modes: peaks {peak1} {peak2} Hz, notches {notch1} {notch2} Hz (expected {anti1:.3} {anti2:.3})");
+    // the other mode's and the table's terms move each extremum a little off the modal
+    // frequency; friction's pre-sliding stiffness lifts the anti-resonances (as for one mode)
+    assert!(
+        (peak1 - 6.0).abs() <= 0.1 && (peak2 - 21.0).abs() <= 0.2,
+        "{peak1} {peak2}"
+    );
+    assert!(
+        (notch1 - anti1).abs() <= 0.2 && (notch2 - anti2).abs() <= 0.2,
+        "{notch1} {notch2}"
+    );
+    // the simulated random test shows both resonances
+    let (f, m) = apparent_mass(&p);
+    let sim1 = extremum(&f, &m, 2.0, 12.0, true);
+    let sim2 = extremum(&f, &m, 15.0, 25.0, true);
+    eprintln!("two modes simulated: resonances {sim1} {sim2} Hz");
+    assert!(
+        (sim1 - 6.0).abs() <= 0.25 && (sim2 - 21.0).abs() <= 0.25,
+        "{sim1} {sim2}"
+    );
+}
+
+/// Absent higher modes (mass 0, whatever their other values) change nothing: the
+/// one-mode specimen computes bit for bit as the specimen always did (mode 1 alone, the
+/// higher modes' states untouched).
+#[test]
+fn one_mode_specimen_is_bit_for_bit_the_specimen() {
+    let mut p = Params::trees_lab();
+    p.apply_effect_spec("specimen:mass_kg=15000,frequency_hz=6,damping_ratio=0.03")
+        .unwrap();
+    let mut q = p;
+    q.specimen.mode2.frequency_hz = 9.0;
+    q.specimen.mode3.damping_ratio = 0.3;
+    let inputs = from_rest(0.02, 3.0, 2.0);
+    let (a, b) = (run(&p, &inputs), run(&q, &inputs));
+    assert_eq!(a, b);
+    let mut sim = Simulator::new(Model::new(&q), 0.0, DEFAULT_MAX_SUBSTEP_S);
+    for w in inputs.windows(2) {
+        sim.advance(1.0 / FS, &w[0], &w[1], &SensorNoise::default());
+    }
+    for i in [ix::XS2, ix::VS2, ix::XS3, ix::VS3, ix::XR, ix::VR] {
+        assert_eq!(sim.state[i], 0.0);
+    }
+    assert!(sim.state[ix::XS] != 0.0);
+}
+
+/// Free-play runs: the outputs and, every sample, the rod-table distance `d` and the
+/// contact force.
+fn free_play_run(p: &Params, inputs: &[Inputs]) -> (Vec<Outputs>, Vec<(f64, f64)>) {
+    let mut sim = Simulator::new(Model::new(p), 0.0, DEFAULT_MAX_SUBSTEP_S);
+    let noise = SensorNoise::default();
+    let (mut out, mut contact) = (Vec::new(), Vec::new());
+    for w in inputs.windows(2) {
+        out.push(sim.outputs(&w[0], &noise));
+        let alg = sim.model.algebraic(&sim.state, &w[0], &noise, 0.0);
+        contact.push((sim.state[ix::XR] - sim.state[ix::X], alg.contact_force_n));
+        sim.advance(1.0 / FS, &w[0], &w[1], &noise);
+        assert!(sim.diverged().is_none(), "{:?}", sim.diverged());
+    }
+    (out, contact)
+}
+
+/// Free play with no gap and a stiff contact: the table follows the rod, and the run is
+/// close to the table without the effect (the moving mass stays M).
+#[test]
+fn free_play_without_gap_follows_the_rod() {
+    let mut p = Params::trees_lab();
+    p.apply_effect_spec("free_play:gap_m=0,contact_stiffness_n_m=1e10,contact_damping_ratio=0.2")
+        .unwrap();
+    let inputs = from_rest(0.02, 2.0, 3.0);
+    let (out, contact) = free_play_run(&p, &inputs);
+    let bare = run(&Params::trees_lab(), &inputs);
+    let dmax = max_abs(bare.iter().map(|o| o.displacement_m));
+    let amax = max_abs(bare.iter().map(|o| o.acceleration_m_s2));
+    let ddev = max_abs(
+        out.iter()
+            .zip(&bare)
+            .map(|(a, b)| a.displacement_m - b.displacement_m),
+    );
+    let adev = max_abs(
+        out.iter()
+            .zip(&bare)
+            .map(|(a, b)| a.acceleration_m_s2 - b.acceleration_m_s2),
+    );
+    let rms = |x: &mut dyn Iterator<Item = f64>| {
+        let v: Vec<f64> = x.collect();
+        (v.iter().map(|y| y * y).sum::<f64>() / v.len() as f64).sqrt()
+    };
+    let arms = rms(&mut bare.iter().map(|o| o.acceleration_m_s2));
+    let adev_rms = rms(&mut out
+        .iter()
+        .zip(&bare)
+        .map(|(a, b)| a.acceleration_m_s2 - b.acceleration_m_s2));
+    let gap = max_abs(contact.iter().map(|c| c.0));
+    eprintln!(
+        "no gap: displacement dev {ddev:.2e} of {dmax:.3}, acceleration dev {adev:.3} of \
+         {amax:.3} (RMS {adev_rms:.3} of {arms:.3}), |d| <= {gap:.2e}"
+    );
+    assert!(ddev < 0.005 * dmax, "{ddev}");
+    // the contact's ringing (kHz) shows in the peak acceleration, little in its RMS
+    assert!(adev < 0.1 * amax, "{adev}");
+    assert!(adev_rms < 0.05 * arms, "{adev_rms}");
+    // the contact deflection is the force over k_c: 0.24 MN / 1e10 N/m = 24 um
+    assert!(gap < 3e-5, "{gap}");
+    // and the no-gap linearisation is close to the baseline's
+    let (lin, base) = (
+        Linearisation::new(&p),
+        Linearisation::new(&Params::trees_lab()),
+    );
+    // (below the oil-column peak; the peak and above move with its frequency)
+    for f in [1.0, 5.0, 10.0] {
+        let (h, h0) = (lin.table_tf(f), base.table_tf(f));
+        assert!((h - h0).norm() < 0.05 * h0.norm(), "{f} Hz: {h} vs {h0}");
+    }
+    // the contact in series with the oil column lowers its peak a little (k_c = 30 k_oil)
+    let (fig, fig0) = (
+        lin.table_tf_figures().unwrap(),
+        base.table_tf_figures().unwrap(),
+    );
+    eprintln!(
+        "no gap: oil-column peak {:.2} Hz (bare {:.2} Hz)",
+        fig.peak_hz, fig0.peak_hz
+    );
+    assert!(fig.peak_hz < fig0.peak_hz && fig0.peak_hz - fig.peak_hz < 0.4);
+    assert!(lin.plant.names.contains(&"rod_x"));
+}
+
+/// Free play with a gap: at each reversal of a slow sine (inertia below friction, so the
+/// contact changes side when the motion does) the rod (and the LVDT) crosses the gap
+/// while the table (the accelerometer) waits, so LVDT minus table displacement swings by
+/// the gap there; the contact never pulls and is silent inside the gap.
+#[test]
+fn free_play_gap_shows_at_reversals_and_never_pulls() {
+    let (gap, f_hz) = (2e-3, 0.2);
+    let mut p = Params::trees_lab();
+    // a well-damped contact: the table settles against the rod soon after each impact
+    p.apply_effect_spec(&format!("free_play:gap_m={gap},contact_damping_ratio=0.5"))
+        .unwrap();
+    let inputs = from_rest(0.02, f_hz, 12.0);
+    let (out, contact) = free_play_run(&p, &inputs);
+    let settled = &contact[(3.0 * FS) as usize..];
+    let hi = settled.iter().map(|c| c.0).fold(f64::MIN, f64::max);
+    let lo = settled.iter().map(|c| c.0).fold(f64::MAX, f64::min);
+    eprintln!("gap {gap}: LVDT - table from {lo:.3e} to {hi:.3e}");
+    assert!(((hi - lo) / gap - 1.0).abs() < 0.1, "{lo} {hi}");
+    // the rod crosses the middle of the gap in the first part of each stroke after a
+    // reversal (every 1/(2f) s; the friction's pre-sliding spring F_mu/Y lets the table
+    // creep back with the rod for a while), and mid-stroke the LVDT leads the table by
+    // half the gap in the direction of motion
+    let half_period = 0.5 / f_hz;
+    let mut crossings = 0;
+    for k in 1..contact.len() {
+        if contact[k - 1].0.signum() != contact[k].0.signum() && k as f64 / FS > 1.0 {
+            let t = k as f64 / FS;
+            let since = t - (t / half_period).floor() * half_period;
+            eprintln!("crossing at {t} s, {since:.3} s after a reversal");
+            assert!(
+                since < 0.4 * half_period,
+                "the rod crossed the gap at t = {t} s, {since} s after a reversal"
+            );
+            crossings += 1;
+        }
+    }
+    assert!(crossings >= 4, "{crossings} crossings");
+    // (not pressed against it at every sample: the loop, tuned for the 41-t table, drives
+    // the light rod alone while it crosses the gap and the rod hammers the table a while)
+    let v_max = max_abs(out.iter().map(|o| o.velocity_m_s));
+    for (o, &(d, _)) in out.iter().zip(&contact).skip((3.0 * FS) as usize) {
+        if o.velocity_m_s.abs() > 0.8 * v_max {
+            assert!(
+                d * o.velocity_m_s > 0.0,
+                "mid-stroke: d {d} at velocity {}",
+                o.velocity_m_s
+            );
+        }
+    }
+    for &(d, f) in &contact {
+        assert!(f * d >= 0.0, "pulls: d {d}, force {f}");
+        if d.abs() <= gap / 2.0 {
+            assert_eq!(f, 0.0, "inside the gap: d {d}, force {f}");
+        }
+    }
+    assert!(out.iter().all(|o| o.displacement_m.is_finite()));
+    // the linearisation joins rod and table rigidly and says so
+    let lin = Linearisation::new(&p);
+    assert!(lin.notes.iter().any(|n| n.contains("free_play")));
+    assert_eq!(
+        lin.plant.order(),
+        Linearisation::new(&Params::trees_lab()).plant.order()
+    );
+}
+
+/// The contact's damping dissipates energy: a rod striking a free table rebounds with its
+/// kinetic energy kept when `zeta_c = 0` and lost in part when `zeta_c > 0` (the contact
+/// force alone, integrated with RK4 over the impact).
+#[test]
+fn free_play_contact_damping_dissipates_energy() {
+    let energy_after = |zeta: f64| {
+        let mut fp = Params::trees_lab().free_play;
+        fp.enabled = true;
+        fp.contact_damping_ratio = zeta;
+        let c = fp.contact();
+        let (mr, mt) = (fp.rod_mass_kg, 40_000.0);
+        // (x_r, v_r, x_t, v_t): the rod at the gap's edge closing at 0.1 m/s
+        let mut s = [c.half_gap_m, 0.1, 0.0, 0.0];
+        let energy = |s: &[f64; 4]| 0.5 * mr * s[1] * s[1] + 0.5 * mt * s[3] * s[3];
+        let e0 = energy(&s);
+        let rate = |s: &[f64; 4]| {
+            let f = c.force(s[0] - s[2], s[1] - s[3]);
+            assert!(f * (s[0] - s[2]) >= 0.0);
+            [s[1], -f / mr, s[3], f / mt]
+        };
+        let h = 1e-6;
+        // one impact: until the rod, having touched, is back inside the gap
+        let mut touched = false;
+        for _ in 0..100_000 {
+            let d = s[0] - s[2];
+            touched |= d > c.half_gap_m;
+            if touched && d <= c.half_gap_m {
+                break;
+            }
+            let k1 = rate(&s);
+            let step = |k: &[f64; 4], a: f64| std::array::from_fn(|i| s[i] + a * k[i]);
+            let k2 = rate(&step(&k1, h / 2.0));
+            let k3 = rate(&step(&k2, h / 2.0));
+            let k4 = rate(&step(&k3, h));
+            s = std::array::from_fn(|i| {
+                s[i] + h / 6.0 * (k1[i] + 2.0 * k2[i] + 2.0 * k3[i] + k4[i])
+            });
+        }
+        // separated again: the rod behind the table
+        assert!(s[1] < s[3], "{s:?}");
+        energy(&s) / e0
+    };
+    let (elastic, damped) = (energy_after(0.0), energy_after(0.1));
+    eprintln!("kinetic energy kept: {elastic:.6} without damping, {damped:.4} with zeta_c 0.1");
+    assert!((elastic - 1.0).abs() < 1e-6, "{elastic}");
+    assert!(damped < 0.8, "{damped}");
+}

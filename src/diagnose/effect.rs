@@ -15,6 +15,10 @@ pub enum Effect {
     ValveDeadband,
 }
 
+/// The effects the diagnosis fits: the catalogue's first five. The second part of the
+/// catalogue (`friction_asymmetry`, `flow_asymmetry`, `free_play`, and the `specimen`'s
+/// modes 2 and 3, declared as its `unfitted` parameters) is not a candidate yet: it has no
+/// informed start; issue 17 work in progress.
 pub const EFFECTS: [Effect; 5] = [
     Effect::Specimen,
     Effect::Foundation,

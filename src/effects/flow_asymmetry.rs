@@ -41,5 +41,8 @@ pub const EFFECT: Effect = Effect {
             unit: None, rule: Positive, fit: (0.2, 5.0),
             "Flow gain for a positive spool over flow gain for a negative spool"),
     ],
+    unfitted: &[],
+    cross_check: None,
+    help: "",
     signature_tests: &["S6", "S9", "R2"],
 };

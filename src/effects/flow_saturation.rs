@@ -46,5 +46,8 @@ pub const EFFECT: Effect = Effect {
         parameter!(flow_saturation.max_flow_m3_s, fmu: "flow_saturation.max_flow",
         vr: 171, unit: Some("m3/s"), rule: Positive, fit: (1e-4, 1.0), "Largest flow Q_max"),
     ],
+    unfitted: &[],
+    cross_check: None,
+    help: "",
     signature_tests: &["S9", "S6", "R2"],
 };

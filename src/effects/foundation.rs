@@ -51,6 +51,9 @@ pub const EFFECT: Effect = Effect {
         parameter!(foundation.damping_ratio, fmu: "foundation.damping_ratio", vr: 153,
             unit: None, rule: NonNegative, fit: (0.002, 0.5), "Foundation damping ratio"),
     ],
+    unfitted: &[],
+    cross_check: None,
+    help: "",
     // the broadest random test shows a stiff foundation's mode, the largest forces its
     // deflection in the LVDT
     signature_tests: &["R1", "R3", "S9"],

@@ -50,5 +50,8 @@ pub const EFFECT: Effect = Effect {
             unit: None, rule: Positive, fit: (0.2, 5.0),
             "Friction sliding positively over friction sliding negatively"),
     ],
+    unfitted: &[],
+    cross_check: None,
+    help: "",
     signature_tests: &["T1", "T3", "S1", "S4"],
 };

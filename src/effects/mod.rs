@@ -21,6 +21,7 @@
 pub mod flow_asymmetry;
 pub mod flow_saturation;
 pub mod foundation;
+pub mod free_play;
 pub mod friction_asymmetry;
 pub mod oscillator;
 pub mod specimen;
@@ -78,14 +79,56 @@ pub struct Effect {
     pub name: &'static str,
     pub switch: Switch,
     pub parameters: &'static [Parameter],
+    /// Parameters declared like [`Effect::parameters`] (parameter file, validation, FMU,
+    /// `--effect`) that the diagnosis does not fit (yet: issue 17 is in progress): the
+    /// `specimen`'s modes 2 and 3.
+    pub unfitted: &'static [Parameter],
+    /// A rule across parameters, checked while the effect is enabled after each
+    /// parameter's own rule (the `free_play` rod lighter than the table, say).
+    pub cross_check: Option<fn(&Params) -> Option<Broken>>,
+    /// More `--effect` syntax for the help, after the parameter list; empty when none.
+    pub help: &'static str,
     /// Test kinds where the effect's signature lives, recorded as the diagnosis names them
     /// today (`src/diagnose/mod.rs`, `Effect::signature_tests`); to be replaced by test
     /// kinds when the diagnosis picks tests by what they excite.
     pub signature_tests: &'static [&'static str],
 }
 
-/// Declares one [`Parameter`] of the block `$block.$field` (see the effect files).
+/// A rule across parameters that `p` breaks: the key to name, its value, the rule in words.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Broken {
+    pub key: &'static str,
+    pub value: f64,
+    pub rule: String,
+}
+
+/// Declares one [`Parameter`] of the block `$block.$field` (see the effect files), or of
+/// a sub-block `$block.$sub.$field` (key `$sub.$field`: the `specimen`'s `mode2.mass_kg`).
 macro_rules! parameter {
+    ($block:ident . $sub:ident . $field:ident, fmu: $fmu:literal, vr: $vr:literal,
+     unit: $unit:expr, rule: $rule:expr, fit: ($lower:expr, $upper:expr), $description:literal) => {
+        $crate::effects::Parameter {
+            key: concat!(stringify!($sub), ".", stringify!($field)),
+            dotted_key: concat!(
+                stringify!($block),
+                ".",
+                stringify!($sub),
+                ".",
+                stringify!($field)
+            ),
+            fmu_name: $fmu,
+            value_reference: $vr,
+            unit: $unit,
+            description: $description,
+            rule: $rule,
+            fit_range: $crate::effects::FitRange {
+                lower: $lower,
+                upper: $upper,
+            },
+            read: |p| p.$block.$sub.$field,
+            write: |p, v| p.$block.$sub.$field = v,
+        }
+    };
     ($block:ident . $field:ident, fmu: $fmu:literal, vr: $vr:literal, unit: $unit:expr,
      rule: $rule:expr, fit: ($lower:expr, $upper:expr), $description:literal) => {
         $crate::effects::Parameter {
@@ -124,7 +167,7 @@ pub(crate) use switch;
 
 /// Every effect, in catalogue order (spec section 7): the order of the parameter file,
 /// the FMU variables, validation and diagnosis.
-pub const CATALOGUE: [Effect; 7] = [
+pub const CATALOGUE: [Effect; 8] = [
     specimen::EFFECT,
     foundation::EFFECT,
     stick_slip::EFFECT,
@@ -132,6 +175,7 @@ pub const CATALOGUE: [Effect; 7] = [
     valve_deadband::EFFECT,
     friction_asymmetry::EFFECT,
     flow_asymmetry::EFFECT,
+    free_play::EFFECT,
 ];
 
 /// The effect named `name`.
@@ -147,14 +191,18 @@ pub fn effect_syntax_help() -> String {
         .iter()
         .map(|e| {
             let keys: Vec<String> = e
-                .parameters
-                .iter()
+                .all_parameters()
                 .map(|q| {
                     let unit = q.unit.map(|u| format!("{u}, ")).unwrap_or_default();
                     format!("{} ({unit}default {})", q.key, (q.read)(&defaults))
                 })
                 .collect();
-            format!("  {}: {}", e.name, keys.join(", "))
+            let line = format!("  {}: {}", e.name, keys.join(", "));
+            if e.help.is_empty() {
+                line
+            } else {
+                format!("{line}\n    {}", e.help)
+            }
         })
         .collect();
     lines.join("\n")
@@ -171,9 +219,14 @@ impl Effect {
         (self.switch.write)(p, if on { 1.0 } else { 0.0 })
     }
 
+    /// Every parameter: the fitted ones ([`Effect::parameters`]), then [`Effect::unfitted`].
+    pub fn all_parameters(&self) -> impl Iterator<Item = &'static Parameter> {
+        self.parameters.iter().chain(self.unfitted.iter())
+    }
+
     /// The parameter with TOML key `key`.
     pub fn parameter(&self, key: &str) -> Option<&'static Parameter> {
-        self.parameters.iter().find(|q| q.key == key)
+        self.all_parameters().find(|q| q.key == key)
     }
 
     /// The parameter `key` in `p`; `None` when the effect has no such parameter.
@@ -206,8 +259,11 @@ impl Effect {
     /// Switch the effect on in `p` and set its parameters from `key=value` pairs: the
     /// `--effect specimen:mass_kg=20000,frequency_hz=6` syntax after the colon.
     /// The result is not validated here ([`Params::apply_effect_spec`] does).
+    /// A key `modeN.key` names mode N of a multi-mode effect (`specimen`): that mode exists
+    /// only with `modeN.mass_kg > 0`, so naming it without a mass is an error.
     pub fn apply_pairs(&self, p: &mut Params, pairs: &str, spec: &str) -> Result<(), String> {
         self.set_enabled(p, true);
+        let mut modes_named: Vec<&str> = Vec::new();
         for pair in pairs.split(',').filter(|s| !s.trim().is_empty()) {
             let (k, v) = pair
                 .split_once('=')
@@ -216,7 +272,7 @@ impl Effect {
             let name = self.name;
             let Some(q) = self.parameter(k) else {
                 // sorted, as the message has always listed them
-                let mut known: Vec<&str> = self.parameters.iter().map(|q| q.key).collect();
+                let mut known: Vec<&str> = self.all_parameters().map(|q| q.key).collect();
                 known.sort_unstable();
                 return Err(format!(
                     "effect `{name}` has no parameter `{k}`; it has {known:?}"
@@ -227,6 +283,19 @@ impl Effect {
                 .parse()
                 .map_err(|_| format!("`{name}.{k}` = `{v}` is not a number"))?;
             (q.write)(p, v);
+            if let Some((mode, _)) = q.key.split_once('.') {
+                modes_named.push(mode);
+            }
+        }
+        for mode in modes_named {
+            let mass_key = format!("{mode}.mass_kg");
+            if self.read(p, &mass_key) == Some(0.0) {
+                return Err(format!(
+                    "`{spec}` sets `{}.{mode}` keys but `{}.{mass_key}` is 0: a mode exists \
+                     only with a mass > 0 (add `{mass_key}=...`)",
+                    self.name, self.name
+                ));
+            }
         }
         Ok(())
     }

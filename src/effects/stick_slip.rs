@@ -75,6 +75,9 @@ pub const EFFECT: Effect = Effect {
             vr: 162, unit: Some("m/s"), rule: Positive, fit: (1e-4, 0.05),
             "Stribeck velocity v_s"),
     ],
+    unfitted: &[],
+    cross_check: None,
+    help: "",
     // the slow sines creep through the Stribeck range twice a cycle
     signature_tests: &["S1", "S2", "S4", "S5", "S7", "S8", "T1", "T3"],
 };

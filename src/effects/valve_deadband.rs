@@ -55,5 +55,8 @@ pub const EFFECT: Effect = Effect {
         vr: 181, unit: None, rule: HalfOpenUnit, fit: (0.0, 0.2),
         "Deadband d (fraction of full spool)"),
     ],
+    unfitted: &[],
+    cross_check: None,
+    help: "",
     signature_tests: &["R2", "T1", "T3", "S1"],
 };

@@ -202,6 +202,12 @@ pub fn state_nominals(p: &crate::params::Params) -> [f64; STATE_COUNT] {
     n[ix::VS] = speed;
     n[ix::XF] = stroke;
     n[ix::VF] = speed;
+    n[ix::XS2] = stroke;
+    n[ix::VS2] = speed;
+    n[ix::XS3] = stroke;
+    n[ix::VS3] = speed;
+    n[ix::XR] = stroke;
+    n[ix::VR] = speed;
     n
 }
 

@@ -30,6 +30,15 @@ fn probe_parameters() -> Vec<Params> {
             p.controller.kv = 1e-2;
             p.controller.ka = 1e-3;
             p.controller.fa = 1e-3;
+            // every specimen mode present
+            p.specimen.mode2.mass_kg = 4000.0;
+            p.specimen.mode3.mass_kg = 2000.0;
+            // with free play the LVDT and the flow read the rod instead of the table: the
+            // union takes both
+            sets.push(Params {
+                free_play: Default::default(),
+                ..p
+            });
             sets.push(p);
         }
     }
@@ -40,8 +49,11 @@ fn probe_parameters() -> Vec<Params> {
 /// table slow enough (3 mm/s relative) for the Stribeck curve to depend on its speed.
 fn operating_point(m: &Model) -> [f64; NX] {
     let mut s = m.rest_state();
+    // the free-play rod 0.3 mm ahead of the table and closing: past the default 0.1-mm
+    // half gap, its contact pushing
     let generic = [
-        0.02, 0.3, 2e5, -1e5, 0.011, 0.004, 0.4, 0.012, 0.14, 1e-4, 1e-3,
+        0.02, 0.3, 2e5, -1e5, 0.011, 0.004, 0.4, 0.012, 0.14, 1e-4, 1e-3, 0.013, 0.12, 0.014, 0.11,
+        0.0113, 0.0045,
     ];
     for (x, g) in s.iter_mut().zip(generic) {
         *x += g;
@@ -81,8 +93,9 @@ mod tests {
 
     #[test]
     fn outputs_read_the_states_the_physics_says() {
+        // the LVDT reads the table, or with free play the actuator rod
         let d = output_state_dependencies(|o| o.displacement_m);
-        assert_eq!(d, vec![ix::X, ix::XF]);
+        assert_eq!(d, vec![ix::X, ix::XF, ix::XR]);
         let f = output_state_dependencies(|o| o.actuator_force_n);
         assert_eq!(f, vec![ix::PA, ix::PB]);
         let a = output_state_dependencies(|o| o.acceleration_m_s2);
@@ -96,6 +109,12 @@ mod tests {
             ix::VS,
             ix::XF,
             ix::VF,
+            ix::XS2,
+            ix::VS2,
+            ix::XS3,
+            ix::VS3,
+            ix::XR,
+            ix::VR,
         ] {
             assert!(a.contains(&k), "acceleration must read state {k}: {a:?}");
         }

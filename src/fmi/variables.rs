@@ -212,7 +212,7 @@ const fn effect_row_count() -> usize {
     let mut n = 0;
     let mut i = 0;
     while i < CATALOGUE.len() {
-        n += 1 + CATALOGUE[i].parameters.len();
+        n += 1 + CATALOGUE[i].parameters.len() + CATALOGUE[i].unfitted.len();
         i += 1;
     }
     n
@@ -250,9 +250,14 @@ const fn all_variables() -> [Variable; ROW_COUNT] {
             feedthrough: &[],
         };
         n += 1;
+        // the fitted parameters, then the unfitted ones (a const fn cannot chain iterators)
         let mut k = 0;
-        while k < effect.parameters.len() {
-            let q = &effect.parameters[k];
+        while k < effect.parameters.len() + effect.unfitted.len() {
+            let q = if k < effect.parameters.len() {
+                &effect.parameters[k]
+            } else {
+                &effect.unfitted[k - effect.parameters.len()]
+            };
             rows[n] = Variable {
                 vr: q.value_reference,
                 name: q.fmu_name,
@@ -379,6 +384,34 @@ const STATES: [StateRow; crate::model::NX] = [
         unit: Some("m/s"), derivative_unit: Some("m/s2"),
         description: "Reaction-mass velocity (foundation effect)",
         derivative_description: "Reaction-mass acceleration" },
+    StateRow { name: "state.specimen_mode2_displacement",
+        derivative: "der(state.specimen_mode2_displacement)",
+        unit: Some("m"), derivative_unit: Some("m/s"),
+        description: "Absolute displacement of specimen mode 2 (specimen effect with several modes)",
+        derivative_description: "Absolute velocity of specimen mode 2" },
+    StateRow { name: "state.specimen_mode2_velocity",
+        derivative: "der(state.specimen_mode2_velocity)",
+        unit: Some("m/s"), derivative_unit: Some("m/s2"),
+        description: "Absolute velocity of specimen mode 2 (specimen effect with several modes)",
+        derivative_description: "Absolute acceleration of specimen mode 2" },
+    StateRow { name: "state.specimen_mode3_displacement",
+        derivative: "der(state.specimen_mode3_displacement)",
+        unit: Some("m"), derivative_unit: Some("m/s"),
+        description: "Absolute displacement of specimen mode 3 (specimen effect with several modes)",
+        derivative_description: "Absolute velocity of specimen mode 3" },
+    StateRow { name: "state.specimen_mode3_velocity",
+        derivative: "der(state.specimen_mode3_velocity)",
+        unit: Some("m/s"), derivative_unit: Some("m/s2"),
+        description: "Absolute velocity of specimen mode 3 (specimen effect with several modes)",
+        derivative_description: "Absolute acceleration of specimen mode 3" },
+    StateRow { name: "state.rod_displacement", derivative: "der(state.rod_displacement)",
+        unit: Some("m"), derivative_unit: Some("m/s"),
+        description: "Absolute actuator-rod displacement (free_play effect; the LVDT reads it)",
+        derivative_description: "Absolute actuator-rod velocity" },
+    StateRow { name: "state.rod_velocity", derivative: "der(state.rod_velocity)",
+        unit: Some("m/s"), derivative_unit: Some("m/s2"),
+        description: "Absolute actuator-rod velocity (free_play effect)",
+        derivative_description: "Absolute actuator-rod acceleration" },
 ];
 
 /// An input row (continuous; interpolated over a step with fmi2SetRealInputDerivatives).

@@ -84,9 +84,15 @@ pub fn check(p: &Params, state: &State) -> Option<Exceeded> {
         }
         ActuatorModel::Nonlinear => (state[ix::PA], state[ix::PB]),
     };
+    // the LVDT follows the actuator rod (free play, spec section 7), else the table
+    let (x, v) = if p.free_play.enabled {
+        (ix::XR, ix::VR)
+    } else {
+        (ix::X, ix::V)
+    };
     let reading = Reading {
-        displacement_m: state[ix::X] - state[ix::XF],
-        velocity_m_s: state[ix::V] - state[ix::VF],
+        displacement_m: state[x] - state[ix::XF],
+        velocity_m_s: state[v] - state[ix::VF],
         pressure_a_pa: pa,
         pressure_b_pa: pb,
     };

@@ -15,6 +15,7 @@ pub mod switching;
 
 pub use controller::{Feedback, Reference};
 
+use crate::effects::free_play::Contact;
 use crate::effects::oscillator::Oscillator;
 use crate::params::{Params, ServovalveModel};
 use actuator::Hydraulics;
@@ -23,7 +24,7 @@ use payload::Payload;
 use servovalve::SpoolDynamics;
 
 /// Number of states.
-pub const NX: usize = 11;
+pub const NX: usize = 17;
 /// The state vector.
 pub type State = [f64; NX];
 
@@ -51,6 +52,20 @@ pub mod ix {
     pub const XF: usize = 9;
     /// Reaction-mass velocity, m/s.
     pub const VF: usize = 10;
+    /// Absolute displacement of specimen mode 2, m (spec section 7, second part).
+    pub const XS2: usize = 11;
+    /// Absolute velocity of specimen mode 2, m/s.
+    pub const VS2: usize = 12;
+    /// Absolute displacement of specimen mode 3, m.
+    pub const XS3: usize = 13;
+    /// Absolute velocity of specimen mode 3, m/s.
+    pub const VS3: usize = 14;
+    /// Absolute actuator-rod displacement (free play), m.
+    pub const XR: usize = 15;
+    /// Absolute actuator-rod velocity (free play), m/s.
+    pub const VR: usize = 16;
+    /// Displacement and velocity states of the specimen's modes, mode 1 first.
+    pub const SPECIMEN_MODES: [(usize, usize); 3] = [(XS, VS), (XS2, VS2), (XS3, VS3)];
 }
 
 /// Sensor noise on the controller's feedback channels at one instant (spec section 2).
@@ -74,9 +89,11 @@ pub struct Inputs {
 pub struct Outputs {
     pub valve_command: f64,
     pub spool_position: f64,
-    /// LVDT displacement relative to the reaction mass, m.
+    /// LVDT displacement relative to the reaction mass, m (with `free_play` the LVDT is
+    /// on the actuator rod, spec section 7).
     pub displacement_m: f64,
-    /// Table velocity relative to the reaction mass, m/s.
+    /// Table velocity relative to the reaction mass, m/s (with `free_play` the rod's, the
+    /// derivative of the LVDT channel).
     pub velocity_m_s: f64,
     /// Absolute table acceleration, m/s^2.
     pub acceleration_m_s2: f64,
@@ -93,8 +110,13 @@ pub struct Model {
     pub hydraulics: Hydraulics,
     pub payload: Payload,
     pub friction: BoucWen,
+    /// The specimen's mode 1 (the one-mode specimen).
     pub specimen: Oscillator,
+    /// The specimen's modes 2 and 3 (each off unless present).
+    pub specimen_modes: [Oscillator; 2],
     pub foundation: Oscillator,
+    /// The free-play contact of actuator rod and table (spec section 7, second part).
+    pub contact: Contact,
 }
 
 /// Forces and signals computed on the way to the derivatives.
@@ -106,8 +128,15 @@ pub struct Algebraic {
     pub spool_position: f64,
     pub actuator_force_n: f64,
     pub acceleration_m_s2: f64,
+    /// Table displacement and velocity relative to the reaction mass (friction, stiffness).
     pub x_rel: f64,
     pub v_rel: f64,
+    /// Piston stroke and its rate relative to the reaction mass: the LVDT and the flow
+    /// equation's (the rod's with free play, else the table's `x_rel`, `v_rel`).
+    pub stroke_m: f64,
+    pub stroke_rate_m_s: f64,
+    /// Force of the rod on the table through the free-play contact, N (0 when off).
+    pub contact_force_n: f64,
 }
 
 impl Model {
@@ -117,17 +146,33 @@ impl Model {
             params: *p,
             valve: SpoolDynamics::new(&p.servovalve),
             hydraulics: Hydraulics::new(p),
-            payload: Payload::new(&p.table),
+            payload: Payload::new(&p.table).without_rod(&p.free_play),
             friction: BoucWen::new(&p.friction, &p.stick_slip)
                 .with_direction(&p.friction_asymmetry),
             specimen: p.specimen.oscillator(),
+            specimen_modes: p.specimen.higher_oscillators(),
             foundation: p.foundation.oscillator(),
+            contact: p.free_play.contact(),
         }
     }
 
     /// True when the spool is a pure delay of the command (needs the solver's history).
     pub fn has_delay(&self) -> bool {
         self.valve.model == ServovalveModel::Delay
+    }
+
+    /// Angular frequency of the free-play rod on its contact (rad/s), 0 without free play:
+    /// the solver's sub-steps resolve it.
+    pub fn contact_rate_rad_s(&self) -> f64 {
+        if self.contact.enabled {
+            let zeta = self.params.free_play.contact_damping_ratio;
+            // the damped pole's modulus grows with the damping: w (zeta + sqrt(zeta^2 + 1))
+            // bounds both eigenvalues of the rod-table pair
+            self.contact.frequency_rad_s(self.params.table.mass_kg)
+                * (zeta + (zeta * zeta + 1.0).sqrt())
+        } else {
+            0.0
+        }
     }
 
     /// The table at rest: chambers at `P_s/2`, everything else zero.
@@ -155,19 +200,23 @@ impl Model {
         let f_a = self.hydraulics.force(s[ix::PA], s[ix::PB]);
         let f_d = self.friction.force(s[ix::Z], v_rel);
         let f_e = self.payload.elastic_force(x_rel);
-        let f_s = if self.specimen.enabled {
-            -self
-                .specimen
-                .restoring_force(s[ix::XS] - s[ix::X], s[ix::VS] - s[ix::V])
+        let f_s = self.specimen_force(s);
+        // free play (spec section 7): the actuator drives the rod, the contact the table
+        let (stroke_m, stroke_rate_m_s, f_c) = if self.contact.enabled {
+            let f_c = self
+                .contact
+                .force(s[ix::XR] - s[ix::X], s[ix::VR] - s[ix::V]);
+            (s[ix::XR] - s[ix::XF], s[ix::VR] - s[ix::VF], f_c)
         } else {
-            0.0
+            (x_rel, v_rel, 0.0)
         };
+        let drive = if self.contact.enabled { f_c } else { f_a };
         let a = self
             .payload
-            .acceleration(f_a - f_d - f_e + f_s + inp.external_force_n);
+            .acceleration(drive - f_d - f_e + f_s + inp.external_force_n);
         let feedback = Feedback {
-            displacement_m: x_rel + noise.displacement_m,
-            velocity_m_s: v_rel,
+            displacement_m: stroke_m + noise.displacement_m,
+            velocity_m_s: stroke_rate_m_s,
             acceleration_m_s2: a + noise.acceleration_m_s2,
             force_n: f_a + noise.force_n,
         };
@@ -186,7 +235,28 @@ impl Model {
             acceleration_m_s2: a,
             x_rel,
             v_rel,
+            stroke_m,
+            stroke_rate_m_s,
+            contact_force_n: f_c,
         }
+    }
+
+    /// The force of the specimen's modes on the table (spec section 7): mode 1, then the
+    /// present higher modes added (so a one-mode specimen computes exactly as before).
+    #[inline(always)]
+    fn specimen_force(&self, s: &State) -> f64 {
+        if !self.specimen.enabled {
+            return 0.0;
+        }
+        let mut f = -self
+            .specimen
+            .restoring_force(s[ix::XS] - s[ix::X], s[ix::VS] - s[ix::V]);
+        for (m, &(xi, vi)) in self.specimen_modes.iter().zip(&ix::SPECIMEN_MODES[1..]) {
+            if m.enabled {
+                f -= m.restoring_force(s[xi] - s[ix::X], s[vi] - s[ix::V]);
+            }
+        }
+        f
     }
 
     /// The derivative function `ds = f(s, inputs)`; returns the algebraic signals.
@@ -212,8 +282,8 @@ impl Model {
             alg.spool_position,
             s[ix::PA],
             s[ix::PB],
-            alg.x_rel,
-            alg.v_rel,
+            alg.stroke_m,
+            alg.stroke_rate_m_s,
         );
         ds[ix::PA] = dpa;
         ds[ix::PB] = dpb;
@@ -222,16 +292,28 @@ impl Model {
         ds[ix::V] = alg.acceleration_m_s2;
         // friction (eq. 4.15) on the stroke velocity
         ds[ix::Z] = self.friction.z_rate(s[ix::Z], alg.v_rel);
-        // specimen (section 7)
-        if self.specimen.enabled {
-            ds[ix::XS] = s[ix::VS];
-            ds[ix::VS] = self
-                .specimen
-                .restoring_force(s[ix::XS] - s[ix::X], s[ix::VS] - s[ix::V])
-                / self.specimen.mass_kg;
+        // specimen (section 7): each mode on the table
+        let modes = [
+            &self.specimen,
+            &self.specimen_modes[0],
+            &self.specimen_modes[1],
+        ];
+        for (m, &(xi, vi)) in modes.into_iter().zip(&ix::SPECIMEN_MODES) {
+            if m.enabled {
+                ds[xi] = s[vi];
+                ds[vi] = m.restoring_force(s[xi] - s[ix::X], s[vi] - s[ix::V]) / m.mass_kg;
+            } else {
+                ds[xi] = 0.0;
+                ds[vi] = 0.0;
+            }
+        }
+        // free play (section 7): the actuator pushes the rod, the contact pushes it back
+        if self.contact.enabled {
+            ds[ix::XR] = s[ix::VR];
+            ds[ix::VR] = (alg.actuator_force_n - alg.contact_force_n) * self.contact.inv_rod_mass;
         } else {
-            ds[ix::XS] = 0.0;
-            ds[ix::VS] = 0.0;
+            ds[ix::XR] = 0.0;
+            ds[ix::VR] = 0.0;
         }
         // foundation (section 7): actuator, friction and stiffness push it back
         if self.foundation.enabled {
@@ -261,8 +343,8 @@ impl Model {
         Outputs {
             valve_command: alg.valve_command,
             spool_position: alg.spool_position,
-            displacement_m: alg.x_rel,
-            velocity_m_s: alg.v_rel,
+            displacement_m: alg.stroke_m,
+            velocity_m_s: alg.stroke_rate_m_s,
             acceleration_m_s2: alg.acceleration_m_s2,
             actuator_force_n: alg.actuator_force_n,
             pressure_a_pa: pa,

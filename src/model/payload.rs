@@ -1,6 +1,6 @@
 //! Payload: rigid table on a horizontal spring (spec section 5, paper eq. 4.4).
 
-use crate::params::Table;
+use crate::params::{FreePlay, Table};
 
 #[derive(Debug, Clone, Copy)]
 pub struct Payload {
@@ -16,6 +16,20 @@ impl Payload {
             mass_kg: t.mass_kg,
             inv_mass: 1.0 / t.mass_kg,
             stiffness_n_m: t.stiffness_n_m,
+        }
+    }
+
+    /// With `free_play` on, the rod's mass moves with the piston and the table keeps
+    /// `M - m_r` (spec section 7, second part); unchanged when it is off.
+    pub fn without_rod(self, f: &FreePlay) -> Self {
+        if !f.enabled {
+            return self;
+        }
+        let mass_kg = self.mass_kg - f.rod_mass_kg;
+        Payload {
+            mass_kg,
+            inv_mass: 1.0 / mass_kg,
+            ..self
         }
     }
 

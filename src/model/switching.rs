@@ -7,7 +7,7 @@ use super::{ix, Inputs, Model, SensorNoise, State};
 use crate::params::ActuatorModel;
 
 /// Number of switching functions.
-pub const SWITCH_COUNT: usize = 9;
+pub const SWITCH_COUNT: usize = 10;
 
 /// What each switching function marks, in order (for the FMU's documentation).
 pub const SWITCHES: [&str; SWITCH_COUNT] = [
@@ -20,6 +20,7 @@ pub const SWITCHES: [&str; SWITCH_COUNT] = [
     "|spool| - deadband (valve deadband edges)",
     "maximum flow - |flow into chamber A| (flow saturation)",
     "maximum flow - |flow out of chamber B| (flow saturation)",
+    "contact of actuator rod and table: positive while it pushes (free play)",
 ];
 
 /// A switch absent from the configuration: never crosses zero.
@@ -57,6 +58,12 @@ impl Model {
             },
             saturation(qa),
             saturation(qb),
+            if self.contact.enabled {
+                self.contact
+                    .pushing(s[ix::XR] - s[ix::X], s[ix::VR] - s[ix::V])
+            } else {
+                ABSENT
+            },
         ]
     }
 }
