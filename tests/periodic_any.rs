@@ -47,7 +47,10 @@ fn check(label: &str, truth: &Params, seed: u64, tol: [f64; 3]) {
     };
     let c = synthesise_program(truth, &program(), &opts, None).unwrap();
     let id = identify(&c);
-    let fr = id.friction.as_ref().unwrap_or_else(|| panic!("{label}: {:?}", id.missing));
+    let fr = id
+        .friction
+        .as_ref()
+        .unwrap_or_else(|| panic!("{label}: {:?}", id.missing));
     let tri = id.triangles.as_ref().unwrap();
     let m = id.mass_kg.unwrap_or(f64::NAN);
     let f = &truth.friction;
@@ -64,17 +67,30 @@ fn check(label: &str, truth: &Params, seed: u64, tol: [f64; 3]) {
     );
     eprintln!("{msg}");
     // no random test: the mass is the periodic tests' own (the fast sine's loop approach)
-    assert!(id.mass_random.is_none() && id.mass_periodic.is_some(), "{msg}");
+    assert!(
+        id.mass_random.is_none() && id.mass_periodic.is_some(),
+        "{msg}"
+    );
     assert!(rel(m, truth.table.mass_kg) < tol[0], "{msg}");
     assert!(rel(fr.force_n, f.force_n) < tol[1], "{msg}");
-    assert!(rel(fr.yield_displacement_m, f.yield_displacement_m) < tol[2], "{msg}");
+    assert!(
+        rel(fr.yield_displacement_m, f.yield_displacement_m) < tol[2],
+        "{msg}"
+    );
     assert!((fr.shape - f.shape).abs() < 0.1, "{msg}");
     let k = truth.table.stiffness_n_m;
     assert!((tri.stiffness_n_m - k).abs() < (0.1 * k).max(2e4), "{msg}");
     // every estimate carries its sigma
-    for key in ["friction.force_n", "friction.yield_displacement_m", "friction.shape"] {
+    for key in [
+        "friction.force_n",
+        "friction.yield_displacement_m",
+        "friction.shape",
+    ] {
         let e = id.estimate(key).unwrap();
-        assert!(e.sigma.is_some_and(|s| s.is_finite() && s > 0.0), "{key}: {e:?}");
+        assert!(
+            e.sigma.is_some_and(|s| s.is_finite() && s > 0.0),
+            "{key}: {e:?}"
+        );
     }
 }
 

@@ -140,7 +140,10 @@ fn device_campaign(scale: f64) -> (tempfile::TempDir, shaketable::campaign::Camp
 fn the_damper_force_is_identified_on_the_chirp_and_checked_on_the_random_run() {
     let (_tmp, c) = device_campaign(9806.65);
     let id = identify(&c);
-    let d = id.device.as_ref().unwrap_or_else(|| panic!("{:?}", id.missing));
+    let d = id
+        .device
+        .as_ref()
+        .unwrap_or_else(|| panic!("{:?}", id.missing));
     eprintln!(
         "fit on {}: F_mu {:.1} +- {:.1} N, Y {:.3e} +- {:.1e} m, b {:.3} +- {:.3}, c {:.1} +- {:.1} N s/m, \
          k {:.0} +- {:.0} N/m, m {:.2} +- {:.2} kg, F0 {:.1}, corner {:.1} Hz, tau {:.1}; fit {:.2} %; checked {:?}",
@@ -165,11 +168,17 @@ fn the_damper_force_is_identified_on_the_chirp_and_checked_on_the_random_run() {
     // check names the change instead of hiding it.
     let check = &d.validation[0];
     assert_eq!(check.test, "15Hz-0A");
-    assert!(check.fit_percent > 12.0 && check.fit_percent < 40.0, "{}", check.fit_percent);
+    assert!(
+        check.fit_percent > 12.0 && check.fit_percent < 40.0,
+        "{}",
+        check.fit_percent
+    );
     // the JSON carries the estimates with sigma and the check
     let j = id.to_json();
     assert!(j["device"]["force_n"].as_f64().is_some(), "{j}");
-    assert!(j["uncertainty"]["device"]["viscous_n_s_m"].as_f64().is_some());
+    assert!(j["uncertainty"]["device"]["viscous_n_s_m"]
+        .as_f64()
+        .is_some());
     assert_eq!(j["device"]["checked_on"][0]["test"], "15Hz-0A");
 }
 
@@ -177,7 +186,10 @@ fn the_damper_force_is_identified_on_the_chirp_and_checked_on_the_random_run() {
 fn the_damper_force_of_the_15hz_run_alone() {
     let (_tmp, c) = campaign();
     let id = identify(&c);
-    let d = id.device.as_ref().unwrap_or_else(|| panic!("{:?}", id.missing));
+    let d = id
+        .device
+        .as_ref()
+        .unwrap_or_else(|| panic!("{:?}", id.missing));
     // measured: fit 85.0 % with F_mu 813 N, c 15 300 N s/m; nothing else to check on
     assert!(d.fit.fit_percent > 83.0, "{}", d.fit.fit_percent);
     assert!(d.validation.is_empty());
@@ -192,7 +204,9 @@ fn without_displacement_and_force_the_device_is_null_with_the_reason() {
     let j = id.to_json();
     assert!(j["device"]["force_n"].is_null(), "{j}");
     assert!(
-        id.missing.iter().any(|m| m.contains("displacement_m and force_n")),
+        id.missing
+            .iter()
+            .any(|m| m.contains("displacement_m and force_n")),
         "{:?}",
         id.missing
     );

@@ -36,6 +36,11 @@ pub const DEVICE_MIN_SAMPLES: usize = 200;
 /// friction slides within a small fraction of the stroke, a soft hysteretic device
 /// yields within a good part of it.
 pub const DEVICE_YIELD_STARTS: [f64; 5] = [0.003, 0.01, 0.03, 0.1, 0.3];
+/// Smallest yield displacement fitted, as a fraction of the RMS displacement step between
+/// samples: a hysteresis that closes within a fraction of one sample's motion is not
+/// resolved by the record (and would cost the Bouc-Wen path hundreds of sub-steps per
+/// sample).
+pub const DEVICE_YIELD_RESOLUTION: f64 = 0.2;
 /// Bouc-Wen shape constant of the start values (the middle of its range [0, 1)).
 const SHAPE_START: f64 = 0.5;
 /// Longest lag of the residual's autocorrelation summed, samples: 2 s at 1 kHz, beyond
@@ -178,7 +183,10 @@ fn linear_start(k: &Kinematics, yield_m: f64) -> Option<(Vec<f64>, f64)> {
     let b = DVector::from_column_slice(&k.f);
     let (x, _) = lsq::linear(&a, &b)?;
     let cost = (&a * &x - &b).norm_squared();
-    Some((vec![x[0], yield_m, SHAPE_START, x[1], x[2], x[3], x[4]], cost))
+    Some((
+        vec![x[0], yield_m, SHAPE_START, x[1], x[2], x[3], x[4]],
+        cost,
+    ))
 }
 
 /// Integrated autocorrelation of the residual, `1 + 2 sum rho_k` up to the first lag whose
@@ -237,6 +245,51 @@ fn test_fit(name: &str, k: &Kinematics, p: &[f64], refit_zero: bool) -> DeviceTe
     }
 }
 
+/// The fit's start (the best of [`DEVICE_YIELD_STARTS`] with the linear parameters by
+/// least squares), bounds (a dissipating friction and damper, `Y` resolved by the
+/// sampling ([`DEVICE_YIELD_RESOLUTION`]), `b` in the parameter file's `[0, 1)`, a mass
+/// within [`MASS_BOUNDS_KG`]) and scales, in the order
+/// `F_mu, Y, b, c, k, m, F_0`.
+#[allow(clippy::type_complexity)]
+fn problem(k: &Kinematics) -> Option<(Vec<f64>, [f64; 7], [f64; 7], [f64; 7])> {
+    let (f_rms, x_rms) = (rms_about_mean(&k.f), rms_about_mean(&k.x));
+    let scaled = |s: f64| {
+        if s > 0.0 && s.is_finite() {
+            f_rms / s
+        } else {
+            f_rms
+        }
+    };
+    let steps: Vec<f64> = k.x.windows(2).map(|w| w[1] - w[0]).collect();
+    let y_min = (DEVICE_YIELD_RESOLUTION * rms_about_mean(&steps)).max(1e-6);
+    let t0 = DEVICE_YIELD_STARTS
+        .iter()
+        .filter_map(|r| linear_start(k, (r * x_rms).max(y_min)))
+        .min_by(|a, b| a.1.total_cmp(&b.1))
+        .map(|(t, _)| t)?;
+    let lower = [0.0, y_min, 0.0, 0.0, -1e12, 0.0, -1e9];
+    let upper = [
+        1e9,
+        (10.0 * x_rms).max(2.0 * y_min),
+        0.999,
+        1e9,
+        1e12,
+        MASS_BOUNDS_KG[1],
+        1e9,
+    ];
+    let t0: Vec<f64> = (0..7).map(|i| t0[i].clamp(lower[i], upper[i])).collect();
+    let scale = [
+        f_rms,
+        t0[1],
+        0.5,
+        scaled(rms_about_mean(&k.v)),
+        scaled(x_rms),
+        scaled(rms_about_mean(&k.a)),
+        f_rms,
+    ];
+    Some((t0, lower, upper, scale))
+}
+
 /// The device fit on the tests of `roles` ([`super::select::device_roles`]): the model
 /// of the module doc fitted on `roles.fit`, checked on `roles.others`.
 pub fn fit_device(c: &Campaign, roles: &DeviceRoles) -> Result<DeviceFit, IdentifyError> {
@@ -255,26 +308,8 @@ pub fn fit_device(c: &Campaign, roles: &DeviceRoles) -> Result<DeviceFit, Identi
             ),
         ));
     }
-    let (f_rms, x_rms) = (rms_about_mean(&k.f), rms_about_mean(&k.x));
-    let scaled = |s: f64| if s > 0.0 && s.is_finite() { f_rms / s } else { f_rms };
-    let t0 = DEVICE_YIELD_STARTS
-        .iter()
-        .filter_map(|r| linear_start(&k, (r * x_rms).max(1e-6)))
-        .min_by(|a, b| a.1.total_cmp(&b.1))
-        .map(|(t, _)| t)
-        .ok_or_else(|| IdentifyError::failed(name, "device start fit failed"))?;
-    let lower = [0.0, 1e-6, 0.0, 0.0, -1e12, 0.0, -1e9];
-    let upper = [1e9, (10.0 * x_rms).max(1e-5), 0.999, 1e9, 1e12, MASS_BOUNDS_KG[1], 1e9];
-    let t0: Vec<f64> = (0..7).map(|i| t0[i].clamp(lower[i], upper[i])).collect();
-    let scale = [
-        f_rms,
-        t0[1],
-        0.5,
-        scaled(rms_about_mean(&k.v)),
-        scaled(x_rms),
-        scaled(rms_about_mean(&k.a)),
-        f_rms,
-    ];
+    let (t0, lower, upper, scale) =
+        problem(&k).ok_or_else(|| IdentifyError::failed(name, "device start fit failed"))?;
     let residual = |p: &[f64]| -> Option<Vec<f64>> {
         Some(k.model(p).iter().zip(&k.f).map(|(m, f)| m - f).collect())
     };
@@ -313,7 +348,10 @@ pub fn fit_device(c: &Campaign, roles: &DeviceRoles) -> Result<DeviceFit, Identi
         corner_hz: k.corner_hz,
         measured_acceleration: k.measured_acceleration,
         fit: test_fit(name, &k, p, false),
-        validation: others.iter().filter_map(|r| r.as_ref().ok().cloned()).collect(),
+        validation: others
+            .iter()
+            .filter_map(|r| r.as_ref().ok().cloned())
+            .collect(),
         not_validated: others
             .iter()
             .filter_map(|r| r.as_ref().err().map(|e| e.to_string()))
@@ -341,7 +379,9 @@ mod tests {
 
     /// A campaign of `records` named T0, T1, ... at `fs`.
     fn campaign(records: Vec<Record>, fs: f64) -> Campaign {
-        use crate::campaign::{CampaignInfo, Control, ControllerOverride, Geometry, TestKind, TestSpec};
+        use crate::campaign::{
+            CampaignInfo, Control, ControllerOverride, Geometry, TestKind, TestSpec,
+        };
         let tests = (0..records.len())
             .map(|i| TestSpec {
                 name: format!("T{i}"),
@@ -401,13 +441,30 @@ mod tests {
             record(x, f, fs)
         };
         let c = campaign(vec![make(20.0), make(13.0)], fs);
-        let d = fit_device(&c, &DeviceRoles { fit: 0, others: vec![1] }).unwrap();
-        let got = [d.force_n, d.yield_displacement_m, d.shape, d.viscous_n_s_m, d.stiffness_n_m];
+        let d = fit_device(
+            &c,
+            &DeviceRoles {
+                fit: 0,
+                others: vec![1],
+            },
+        )
+        .unwrap();
+        let got = [
+            d.force_n,
+            d.yield_displacement_m,
+            d.shape,
+            d.viscous_n_s_m,
+            d.stiffness_n_m,
+        ];
         for (g, t) in got.iter().zip(&truth) {
             assert!((g / t - 1.0).abs() < 0.02, "{got:?} vs {truth:?}");
         }
         assert!(d.fit.fit_percent > 99.0, "{}", d.fit.fit_percent);
-        assert!(d.validation[0].fit_percent > 99.0, "{}", d.validation[0].fit_percent);
+        assert!(
+            d.validation[0].fit_percent > 99.0,
+            "{}",
+            d.validation[0].fit_percent
+        );
     }
 
     #[test]
@@ -417,10 +474,24 @@ mod tests {
         let (_, [_, v, _]) = band_limited(&x, fs).unwrap();
         let f: Vec<f64> = v.iter().map(|v| -1e3 * v).collect();
         let mut c = campaign(vec![record(x, f, fs)], fs);
-        let e = fit_device(&c, &DeviceRoles { fit: 0, others: vec![] }).unwrap_err();
+        let e = fit_device(
+            &c,
+            &DeviceRoles {
+                fit: 0,
+                others: vec![],
+            },
+        )
+        .unwrap_err();
         assert!(e.to_string().contains("opposite sign"), "{e}");
         c.records[0] = record(vec![0.0; 1000], vec![1.0; 1000], fs);
-        let e = fit_device(&c, &DeviceRoles { fit: 0, others: vec![] }).unwrap_err();
+        let e = fit_device(
+            &c,
+            &DeviceRoles {
+                fit: 0,
+                others: vec![],
+            },
+        )
+        .unwrap_err();
         assert!(e.to_string().contains("does not move"), "{e}");
     }
 }

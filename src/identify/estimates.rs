@@ -84,7 +84,11 @@ impl Identification {
                 fr.map(|f| f.yield_displacement_m),
                 fr.map(|f| f.sigma_yield_displacement_m),
             ),
-            e("friction.shape", fr.map(|f| f.shape), fr.map(|f| f.sigma_shape)),
+            e(
+                "friction.shape",
+                fr.map(|f| f.shape),
+                fr.map(|f| f.sigma_shape),
+            ),
             e(
                 "validation.table_tf_error",
                 val.map(|v| v.table_tf_error),
@@ -139,7 +143,13 @@ impl Identification {
         let mut v: Vec<Estimate> = keys
             .iter()
             .enumerate()
-            .map(|(i, k)| e(*k, values.map(|x| x[i]), d.and_then(|d| d.sigma.get(i).copied())))
+            .map(|(i, k)| {
+                e(
+                    *k,
+                    values.map(|x| x[i]),
+                    d.and_then(|d| d.sigma.get(i).copied()),
+                )
+            })
             .collect();
         v.push(e("device.nrmse", d.map(|d| d.fit.nrmse), None));
         v.push(e("device.fit_percent", d.map(|d| d.fit.fit_percent), None));

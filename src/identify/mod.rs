@@ -28,12 +28,12 @@ mod signals;
 pub mod spool;
 mod validation;
 
+pub use device::fit_device;
 pub use error::IdentifyError;
 pub use estimates::Estimate;
 pub use friction::{bouc_wen_path, fit_friction, fit_triangles};
 pub use mass::{fit_mass, fit_mass_corrected};
 pub use oil_column::{fit_oil_column, OilGeometry};
-pub use device::fit_device;
 pub use periodic::{fit_friction_and_mass, fit_mass_periodic};
 pub use results::*;
 pub use servovalve::{fit_servovalve, relative_error};
@@ -223,7 +223,10 @@ pub fn identify_screened(s: &Screening) -> Identification {
         // no random test's mass: friction and mass from the sines together
         None => {
             let (fr, mp) = periodic::periodic_without_random_mass(c, k, f_mu0);
-            (fr.map_err(|e| note(Err(e))).ok(), mp.map_err(|e| note(Err(e))).ok())
+            (
+                fr.map_err(|e| note(Err(e))).ok(),
+                mp.map_err(|e| note(Err(e))).ok(),
+            )
         }
     };
     // refine the random-data mass with the friction removed in the time domain
@@ -368,7 +371,11 @@ impl Identification {
         out["uncertainty"] = Value::Object(unc);
         if let Some(d) = &self.device {
             out["device"]["test"] = json!(d.test);
-            out["device"]["checked_on"] = d.validation.iter().map(|t| json!({"test": t.test, "nrmse": t.nrmse, "fit_percent": t.fit_percent})).collect();
+            out["device"]["checked_on"] = d
+                .validation
+                .iter()
+                .map(|t| json!({"test": t.test, "nrmse": t.nrmse, "fit_percent": t.fit_percent}))
+                .collect();
         }
         out
     }
