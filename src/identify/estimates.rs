@@ -26,7 +26,7 @@ impl Identification {
         let mr = self.mass_random.as_ref();
         let mp = self.mass_periodic.as_ref();
         let tri = self.triangles.as_ref();
-        vec![
+        let mut list = vec![
             e("servovalve.gain", v.map(|v| v.gain), None),
             e(
                 "servovalve.time_constant_s",
@@ -82,9 +82,13 @@ impl Identification {
             e(
                 "friction.yield_displacement_m",
                 fr.map(|f| f.yield_displacement_m),
-                None,
+                fr.map(|f| f.sigma_yield_displacement_m),
             ),
-            e("friction.shape", fr.map(|f| f.shape), None),
+            e(
+                "friction.shape",
+                fr.map(|f| f.shape),
+                fr.map(|f| f.sigma_shape),
+            ),
             e(
                 "validation.table_tf_error",
                 val.map(|v| v.table_tf_error),
@@ -106,7 +110,50 @@ impl Identification {
                 o.map(|o| o.leakage_m3_s_pa),
                 None,
             ),
-        ]
+        ];
+        list.extend(self.device_estimates());
+        list
+    }
+
+    /// The device's estimates (`device.*`; `null` when no test has displacement and
+    /// force, see `missing`): the parameters of [`super::fit_device`] with sigma, and the
+    /// force fit on the test it was fitted on.
+    fn device_estimates(&self) -> Vec<Estimate> {
+        let d = self.device.as_ref();
+        let keys = [
+            "device.force_n",
+            "device.yield_displacement_m",
+            "device.shape",
+            "device.viscous_n_s_m",
+            "device.stiffness_n_m",
+            "device.mass_kg",
+            "device.offset_n",
+        ];
+        let values = d.map(|d| {
+            [
+                d.force_n,
+                d.yield_displacement_m,
+                d.shape,
+                d.viscous_n_s_m,
+                d.stiffness_n_m,
+                d.mass_kg,
+                d.offset_n,
+            ]
+        });
+        let mut v: Vec<Estimate> = keys
+            .iter()
+            .enumerate()
+            .map(|(i, k)| {
+                e(
+                    *k,
+                    values.map(|x| x[i]),
+                    d.and_then(|d| d.sigma.get(i).copied()),
+                )
+            })
+            .collect();
+        v.push(e("device.nrmse", d.map(|d| d.fit.nrmse), None));
+        v.push(e("device.fit_percent", d.map(|d| d.fit.fit_percent), None));
+        v
     }
 
     /// The estimate named `key`, if there is such an estimate.

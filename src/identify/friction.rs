@@ -255,6 +255,8 @@ pub fn fit_friction(
         yield_displacement_m: y,
         shape: b,
         sigma_force_n: fit.sigma[0],
+        sigma_yield_displacement_m: fit.sigma[1],
+        sigma_shape: fit.sigma[2],
         rms_error_n: (fit.cost / fit.residuals as f64).sqrt(),
         displacement_m: d0.x.iter().step_by(step).copied().collect(),
         velocity_m_s: d0.v.iter().step_by(step).copied().collect(),

@@ -8,8 +8,11 @@
 //! the slow sines (4.2.3, eqs. 4.13-4.15); mass by the loop approach from the fast sines
 //! (4.2.2, [`periodic`]); oil column from the oil-column test (4.1.3, [`oil_column`]);
 //! validation of the table TF (section 5, [`validation`]). On the paper's program these
-//! are R1, T1-T6, R2, S1/S2/S4/S5/S7/S8, S3/S6/S9, R3 and R2.
+//! are R1, T1-T6, R2, S1/S2/S4/S5/S7/S8, S3/S6/S9, R3 and R2. Without a random test's
+//! mass, friction and mass come from the sines together ([`periodic`]). Apart: a device
+//! between actuator and reaction from any test with displacement and force ([`device`]).
 
+mod device;
 mod error;
 mod estimates;
 pub mod frf;
@@ -26,12 +29,13 @@ mod signals;
 pub mod spool;
 mod validation;
 
+pub use device::fit_device;
 pub use error::IdentifyError;
 pub use estimates::Estimate;
 pub use friction::{bouc_wen_path, fit_friction, fit_triangles};
 pub use mass::{fit_mass, fit_mass_corrected};
 pub use oil_column::{fit_oil_column, OilGeometry};
-pub use periodic::fit_mass_periodic;
+pub use periodic::{fit_friction_and_mass, fit_mass_periodic};
 pub use results::*;
 pub use servovalve::{fit_servovalve, relative_error};
 pub use validation::validate;
@@ -212,17 +216,21 @@ pub fn identify_screened(s: &Screening) -> Identification {
         .map(|t| t.sliding_friction_n)
         .unwrap_or(p.friction.force_n);
     let (slow_sines, fast_sines) = select::sine_roles(c, m0.unwrap_or(p.table.mass_kg), f_mu0);
-    let friction = match (m0, roles.mass) {
-        (Some(m0), _) => fit_friction(c, &slow_sines, m0, k, f_mu0),
-        (None, mass_test) => Err(IdentifyError::NeedsUpstream {
-            what: "Bouc-Wen friction".into(),
-            needs: format!("the mass from {}", mass_test.map_or("a random test", name)),
-        }),
+    let (friction, mass_periodic) = match m0 {
+        Some(m0) => {
+            let fr = fit_friction(c, &slow_sines, m0, k, f_mu0).map_err(|e| note(Err(e)));
+            let mp = fit_mass_periodic(c, &fast_sines, k, fr.as_ref().ok());
+            (fr.ok(), mp.map_err(|e| note(Err(e))).ok())
+        }
+        // no random test's mass: friction and mass from the sines together
+        None => {
+            let (fr, mp) = periodic::periodic_without_random_mass(c, k, f_mu0);
+            (
+                fr.map_err(|e| note(Err(e))).ok(),
+                mp.map_err(|e| note(Err(e))).ok(),
+            )
+        }
     };
-    let friction = friction.map_err(|e| note(Err(e))).ok();
-    let mass_periodic = fit_mass_periodic(c, &fast_sines, k, friction.as_ref())
-        .map_err(|e| note(Err(e)))
-        .ok();
     // refine the random-data mass with the friction removed in the time domain
     let mass_random = match (&mass_random, &friction, roles.mass) {
         (Some(_), Some(fr), Some(i)) => {
@@ -239,6 +247,12 @@ pub fn identify_screened(s: &Screening) -> Identification {
         )));
     }
     p.table.mass_kg = mass_kg.unwrap_or(p.table.mass_kg);
+    // triangles fitted with the default mass (no random test): again with the identified
+    let triangles = match (m0, mass_kg) {
+        (None, Some(m)) if triangles.is_some() => fit_triangles(c, m).ok().or(triangles),
+        _ => triangles,
+    };
+    let k = triangles.as_ref().map_or(k, |t| t.stiffness_n_m);
     p.table.stiffness_n_m = k.max(0.0);
     if let Some(fr) = &friction {
         p.friction.force_n = fr.force_n;
@@ -280,6 +294,15 @@ pub fn identify_screened(s: &Screening) -> Identification {
             p.actuator.model = ActuatorModel::Nonlinear;
         }
     }
+    let device = match select::device_roles(c) {
+        Some(r) => in_file(c, name(r.fit), fit_device(c, &r)),
+        None => Err(absent_role(
+            s,
+            "device test (a test recording displacement_m and force_n)",
+            "device force not identified",
+        )),
+    };
+    let device = device.map_err(|e| note(Err(e))).ok();
     let known = greybox::Known {
         servovalve: valve.is_some(),
         mass: mass_kg.is_some(),
@@ -310,6 +333,7 @@ pub fn identify_screened(s: &Screening) -> Identification {
         mass_periodic,
         oil_column: oil,
         validation,
+        device,
         mass_kg,
         params: p,
         missing,
@@ -409,6 +433,14 @@ impl Identification {
             }
         }
         out["uncertainty"] = Value::Object(unc);
+        if let Some(d) = &self.device {
+            out["device"]["test"] = json!(d.test);
+            out["device"]["checked_on"] = d
+                .validation
+                .iter()
+                .map(|t| json!({"test": t.test, "nrmse": t.nrmse, "fit_percent": t.fit_percent}))
+                .collect();
+        }
         out["closed_loop"] = serde_json::to_value(&self.closed_loop).unwrap_or(Value::Null);
         out["comparison"] = serde_json::to_value(&self.comparison).unwrap_or(Value::Null);
         out

@@ -117,12 +117,63 @@ pub struct FrictionFit {
     pub yield_displacement_m: f64,
     pub shape: f64,
     pub sigma_force_n: f64,
+    /// One-sigma uncertainties of `Y` and `b` (Levenberg-Marquardt covariance).
+    pub sigma_yield_displacement_m: f64,
+    pub sigma_shape: f64,
     pub rms_error_n: f64,
     /// Figure 9 data (decimated): displacement, velocity, dissipative force, fitted force.
     pub displacement_m: Vec<f64>,
     pub velocity_m_s: Vec<f64>,
     pub dissipative_force_n: Vec<f64>,
     pub fitted_force_n: Vec<f64>,
+}
+
+/// The device's force on one test: force-fit NRMSE (`RMS(meas - model) /
+/// RMS(meas - mean(meas))`) and fit % (`100 (1 - NRMSE)`), and a window of its hysteresis
+/// loop around the peak stroke for the report.
+#[derive(Debug, Clone, Serialize)]
+pub struct DeviceTestFit {
+    pub test: String,
+    pub nrmse: f64,
+    pub fit_percent: f64,
+    /// The load cell's zero used on this test, N (re-estimated on a checked test).
+    pub offset_n: f64,
+    pub displacement_m: Vec<f64>,
+    pub measured_force_n: Vec<f64>,
+    pub model_force_n: Vec<f64>,
+}
+
+/// A device between actuator and reaction (or the table's own force balance) from a test
+/// with displacement and force: `F = F_mu Z(x) + c v + k x + m a + F_0`, Bouc-Wen `Z` of
+/// eqs. 4.14-4.15 ([`super::fit_device`]).
+#[derive(Debug, Clone, Serialize)]
+pub struct DeviceFit {
+    /// The test it was fitted on.
+    pub test: String,
+    pub force_n: f64,
+    pub yield_displacement_m: f64,
+    pub shape: f64,
+    pub viscous_n_s_m: f64,
+    pub stiffness_n_m: f64,
+    /// Inertia of what moves between displacement sensor and load cell, kg.
+    pub mass_kg: f64,
+    pub offset_n: f64,
+    /// One-sigma uncertainties in the order `F_mu, Y, b, c, k, m, F_0`, from the
+    /// Levenberg-Marquardt covariance scaled by the residual's correlation factor.
+    pub sigma: Vec<f64>,
+    /// `1 + 2 sum rho_k` of the residual (the sigma above are scaled by its root).
+    pub sigma_correlation_factor: f64,
+    /// Pass-band corner of the zero-phase velocity and acceleration, Hz.
+    pub corner_hz: f64,
+    /// Whether `m a` used a measured acceleration (else the displacement's second
+    /// derivative).
+    pub measured_acceleration: bool,
+    /// The fit on its own test.
+    pub fit: DeviceTestFit,
+    /// The same parameters on every other test with displacement and force.
+    pub validation: Vec<DeviceTestFit>,
+    /// Other tests that could not be checked, with the reason.
+    pub not_validated: Vec<String>,
 }
 
 /// Mass by the loop approach (eqs. 4.11-4.12) per sine test.
@@ -164,6 +215,8 @@ pub struct Identification {
     pub mass_periodic: Option<PeriodicMassFit>,
     pub oil_column: Option<OilColumnFit>,
     pub validation: Option<Validation>,
+    /// The device force from a test with displacement and force.
+    pub device: Option<DeviceFit>,
     /// The final mass: inverse-variance mean of the random and periodic estimates, `None`
     /// when neither exists (the parameter file then keeps the default, marked as such).
     pub mass_kg: Option<f64>,

@@ -15,6 +15,10 @@
 //!   most [`SLOW_SINE_INERTIA_RATIO`] times the friction (S1, S2, S4, S5, S7, S8).
 //! - **loop mass** (4.2.2): the other sines, where inertia dominates (S3, S6, S9).
 //! - **stiffness and sliding friction** (4.2.1): every triangle test.
+//! - **device force** (eqs. 4.14-4.15 plus viscous, elastic and inertia terms): fitted on
+//!   a test with displacement and force, broadband first (a random or recorded motion
+//!   holds many amplitudes and speeds: friction and viscosity separate), then the longest;
+//!   checked on every other test with both channels.
 
 use crate::campaign::{Campaign, Control, Measured, TestKind};
 use std::f64::consts::PI;
@@ -34,6 +38,30 @@ pub const OIL_COLUMN_NEEDS: &[Measured] = &[
     Measured::Acceleration,
     Measured::Force,
 ];
+
+/// The device estimator's channels.
+pub const DEVICE_NEEDS: &[Measured] = &[Measured::Displacement, Measured::Force];
+
+/// The device tests (indices into the campaign): the one fitted, the ones checked.
+#[derive(Debug, Clone, Default, PartialEq, Eq)]
+pub struct DeviceRoles {
+    pub fit: usize,
+    pub others: Vec<usize>,
+}
+
+/// The device tests of `c` (see the module doc), `None` when no test records
+/// displacement and force.
+pub fn device_roles(c: &Campaign) -> Option<DeviceRoles> {
+    let with: Vec<usize> = (0..c.info.tests.len())
+        .filter(|&i| c.records[i].has_all(DEVICE_NEEDS))
+        .collect();
+    let broadband = |i: usize| matches!(c.info.tests[i].kind, TestKind::Random | TestKind::Record);
+    let fit = best_by(&with, |i| (broadband(i), true, c.records[i].len() as f64))?;
+    Some(DeviceRoles {
+        fit,
+        others: with.into_iter().filter(|&i| i != fit).collect(),
+    })
+}
 
 /// The random tests' roles (indices into the campaign).
 #[derive(Debug, Clone, Copy, Default, PartialEq, Eq)]

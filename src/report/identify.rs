@@ -155,16 +155,120 @@ pub fn summary_rows(id: &Identification, truth: Option<&Params>) -> Vec<Row> {
             truth: None,
         },
     ];
-    // the truth's table TF peak, for the validation line
+    // the device fit, when a test has displacement and force (no truth: a device is no
+    // parameter of the table)
+    if id.device.is_some() {
+        rows.extend(DEVICE_ROWS.iter().map(|k| Row {
+            key: *k,
+            value: estimate_of(id, k).value.unwrap_or(f64::NAN),
+            sigma: estimate_of(id, k).sigma.filter(|s| s.is_finite()),
+            truth: None,
+        }));
+    }
+    let validation_row = rows.iter().position(|r| r.key == "validation.peak_hz");
     if let Some(p) = truth {
         let mut q = *p;
         q.specimen.enabled = false;
         q.foundation.enabled = false;
-        if let Some(f) = crate::linear::Linearisation::new(&q).table_tf_figures() {
-            rows.last_mut().unwrap().truth = Some(f.peak_hz);
+        if let (Some(f), Some(i)) = (
+            crate::linear::Linearisation::new(&q).table_tf_figures(),
+            validation_row,
+        ) {
+            rows[i].truth = Some(f.peak_hz);
         }
     }
     rows
+}
+
+/// The device rows of the summary (after the table's).
+const DEVICE_ROWS: [&str; 7] = [
+    "device.force_n",
+    "device.yield_displacement_m",
+    "device.shape",
+    "device.viscous_n_s_m",
+    "device.stiffness_n_m",
+    "device.mass_kg",
+    "device.fit_percent",
+];
+
+/// The device fit's text: the model, its parameters with sigma and its fit % per test.
+fn device_text(d: &crate::identify::DeviceFit) -> String {
+    let sig = |i: usize| d.sigma.get(i).copied().unwrap_or(f64::NAN);
+    let checked = match d.validation.is_empty() {
+        true => "no other test".to_string(),
+        false => d
+            .validation
+            .iter()
+            .map(|t| format!("{} fit {:.1} %", t.test, t.fit_percent))
+            .collect::<Vec<_>>()
+            .join(", "),
+    };
+    format!(
+        "F = F_mu Z(x) + c v + k x + m a + F_0 with Z the Bouc-Wen variable of eqs. 4.14-4.15 driven by \
+         the measured displacement (zero-phase, band-limited to {:.1} Hz, as the velocity{}), fitted on {} \
+         by Levenberg-Marquardt: F_mu = {:.4e} N +- {:.2e}, Y = {:.4e} m +- {:.2e}, b = {:.3} +- {:.3}, \
+         c = {:.4e} N s/m +- {:.2e}, k = {:.4e} N/m +- {:.2e}, m = {:.4e} kg +- {:.2e}, F_0 = {:.1} N \
+         (sigma from the covariance times the root of the residual's correlation factor {:.1}). \
+         Force-fit NRMSE {:.4}, fit {:.1} %. Checked on (only the load cell's zero re-estimated): {}.{}",
+        d.corner_hz,
+        if d.measured_acceleration { "; acceleration measured" } else { " and the acceleration" },
+        d.test, d.force_n, sig(0), d.yield_displacement_m, sig(1), d.shape, sig(2),
+        d.viscous_n_s_m, sig(3), d.stiffness_n_m, sig(4), d.mass_kg, sig(5), d.offset_n,
+        d.sigma_correlation_factor, d.fit.nrmse, d.fit.fit_percent, checked,
+        d.not_validated.iter().map(|m| format!(" Not checked: {m}.")).collect::<String>()
+    )
+}
+
+/// The device's hysteresis loops (measured and modelled force against displacement, a
+/// window around the peak stroke) on the test it was fitted on and the first test it was
+/// checked on, with the text.
+fn device_section(
+    dir: &Path,
+    d: &crate::identify::DeviceFit,
+) -> Result<Vec<(String, String, String)>, super::ReportError> {
+    let mut out = Vec::new();
+    for (k, t) in std::iter::once(&d.fit)
+        .chain(d.validation.first())
+        .enumerate()
+    {
+        let (fig, role) = match k {
+            0 => ("device_fit.png", "fitted"),
+            _ => ("device_check.png", "checked"),
+        };
+        let title = format!(
+            "Device force vs displacement, {} ({role}), fit {:.1} %",
+            t.test, t.fit_percent
+        );
+        xy_png(
+            &dir.join(fig),
+            &title,
+            "displacement (m)",
+            "force (N)",
+            &[
+                Series {
+                    label: "measured",
+                    x: &t.displacement_m,
+                    y: &t.measured_force_n,
+                    points: true,
+                },
+                Series {
+                    label: "model",
+                    x: &t.displacement_m,
+                    y: &t.model_force_n,
+                    points: false,
+                },
+            ],
+        )?;
+        let text = match k {
+            0 => device_text(d),
+            _ => format!(
+                "The parameters fitted on {} on {} (load cell zero {:.1} N): NRMSE {:.4}, fit {:.1} %.",
+                d.test, t.test, t.offset_n, t.nrmse, t.fit_percent
+            ),
+        };
+        out.push((format!("Device force ({})", t.test), fig.to_string(), text));
+    }
+    Ok(out)
 }
 
 /// The estimate `key` of `id`; every key the report asks for exists (see the test).
@@ -565,6 +669,9 @@ pub fn write(
                 v.measured_figures.map(|m| format!("{:.3} Hz, phase drop {:.0} degrees over +-1 Hz", m.peak_hz, m.phase_drop_deg)).unwrap_or("-".into())
             ),
         ));
+    }
+    if let Some(d) = &id.device {
+        sections.extend(device_section(dir, d)?);
     }
     let _ = FrfData::default();
     // README.md
