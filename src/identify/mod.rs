@@ -382,7 +382,7 @@ fn compare_all(c: &Campaign, p: &Params) -> Vec<greybox::ChannelFit> {
         .into_iter()
         .map(|i| (i, greybox::Role::Estimation))
         .collect();
-    greybox::compare::compare(p, c, &tests, &greybox::compare::COMPARED).0
+    greybox::compare::compare(p, c, &tests, &greybox::compare::COMPARED).fits
 }
 
 /// The final mass: inverse-variance mean of the random and periodic estimates, `None`

@@ -673,6 +673,9 @@ pub fn write(
     if let Some(d) = &id.device {
         sections.extend(device_section(dir, d)?);
     }
+    if let Some(cl) = &id.closed_loop {
+        sections.extend(super::closed_loop::sections(dir, cl)?);
+    }
     let _ = FrfData::default();
     // README.md
     let mut md = format!(

@@ -1,6 +1,7 @@
 //! Figures (plotters) and report pages. Everything here reads results; nothing computes
 //! physics.
 
+pub mod closed_loop;
 pub mod diagnose;
 pub mod identify;
 pub mod plot;

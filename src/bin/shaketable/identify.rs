@@ -73,6 +73,9 @@ pub fn run(args: Args) -> anyhow::Result<()> {
     for (k, why) in id.defaults() {
         println!("default kept in the parameter file: {k} ({why})");
     }
+    if let Some(cl) = &id.closed_loop {
+        print!("{}", shaketable::report::closed_loop::text(cl));
+    }
     outputs.write(
         &(serde_json::to_string_pretty(&id.to_json())? + "\n"),
         &id.params.to_toml_string(),

@@ -43,6 +43,37 @@ pub struct ChannelFit {
     pub measured_rms: f64,
 }
 
+/// Seconds of each test kept for the report's measured-against-simulated figure.
+const TRACE_S: f64 = 10.0;
+/// Most points of such a figure (the trace is decimated evenly beyond).
+const TRACE_POINTS: usize = 4000;
+
+/// Measured against simulated over the first [`TRACE_S`] of a test, means removed.
+#[derive(Debug, Clone, Default)]
+pub struct Trace {
+    pub test: String,
+    pub channel: &'static str,
+    pub role: Option<Role>,
+    pub time_s: Vec<f64>,
+    pub measured: Vec<f64>,
+    pub simulated: Vec<f64>,
+}
+
+fn trace(test: &str, channel: &'static str, role: Role, fs: f64, meas: &[f64], sim: &[f64]) -> Trace {
+    let n = ((TRACE_S * fs) as usize).min(meas.len()).min(sim.len());
+    let stride = n.div_ceil(TRACE_POINTS).max(1);
+    let (mm, ms) = (mean(meas), mean(sim));
+    let idx: Vec<usize> = (0..n).step_by(stride).collect();
+    Trace {
+        test: test.to_string(),
+        channel,
+        role: Some(role),
+        time_s: idx.iter().map(|&k| k as f64 / fs).collect(),
+        measured: idx.iter().map(|&k| meas[k] - mm).collect(),
+        simulated: idx.iter().map(|&k| sim[k] - ms).collect(),
+    }
+}
+
 /// Test `i` simulated with `p` as it was run: the test's controller override applied to
 /// `p`'s gains, the table starting at rest at the reference's first displacement.
 /// `Err` with the time and reason when the run left the envelope.
@@ -125,25 +156,28 @@ pub fn nrmse(meas: &[f64], sim: &[f64]) -> Option<(f64, f64)> {
     (n > 0 && y2 > 0.0 && e2.is_finite()).then(|| ((e2 / y2).sqrt(), rms))
 }
 
+/// What [`compare`] gives: the fits, the first seconds of each for a figure, and the
+/// tests whose simulation stopped (with why).
+#[derive(Debug, Clone, Default)]
+pub struct Comparison {
+    pub fits: Vec<ChannelFit>,
+    pub traces: Vec<Trace>,
+    pub stopped: Vec<String>,
+}
+
 /// Per test of `tests` (with its role) and channel of `channels` it recorded: the fit of
-/// `p`. A test whose simulation stopped is reported in `Err` with the reason.
-pub fn compare(
-    p: &Params,
-    c: &Campaign,
-    tests: &[(usize, Role)],
-    channels: &[Measured],
-) -> (Vec<ChannelFit>, Vec<String>) {
+/// `p`. A test whose simulation stopped is reported with the reason.
+pub fn compare(p: &Params, c: &Campaign, tests: &[(usize, Role)], channels: &[Measured]) -> Comparison {
     let runs: Vec<(usize, Role, Result<Vec<Outputs>, String>)> = tests
         .par_iter()
         .map(|&(i, role)| (i, role, simulate_as_run(p, c, i)))
         .collect();
-    let mut fits = Vec::new();
-    let mut stopped = Vec::new();
+    let mut out = Comparison::default();
     for (i, role, run) in runs {
         let sim = match run {
             Ok(s) => s,
             Err(e) => {
-                stopped.push(e);
+                out.stopped.push(e);
                 continue;
             }
         };
@@ -153,8 +187,10 @@ pub fn compare(
             };
             let s: Vec<f64> = sim.iter().map(|o| simulated(o, m)).collect();
             if let Some((e, rms)) = nrmse(meas, &s) {
-                fits.push(ChannelFit {
-                    test: c.info.tests[i].name.clone(),
+                let test = &c.info.tests[i].name;
+                out.traces.push(trace(test, m.name(), role, c.sample_rate_of(i), meas, &s));
+                out.fits.push(ChannelFit {
+                    test: test.clone(),
                     channel: m.name(),
                     role,
                     nrmse: e,
@@ -164,7 +200,7 @@ pub fn compare(
             }
         }
     }
-    (fits, stopped)
+    out
 }
 
 #[cfg(test)]

@@ -22,7 +22,7 @@ mod start;
 mod structure;
 
 pub use combinations::{Combination, INSEPARABLE_CORRELATION};
-pub use compare::{ChannelFit, Role};
+pub use compare::{ChannelFit, Comparison, Role, Trace};
 pub use parameters::GreyParameter;
 pub use structure::{Convention, Known};
 
@@ -81,6 +81,9 @@ pub struct ClosedLoopFit {
     pub fits: Vec<ChannelFit>,
     /// Tests whose simulation stopped (the envelope), with why.
     pub stopped: Vec<String>,
+    /// The first seconds of each test and channel, for the report.
+    #[serde(skip)]
+    pub traces: Vec<Trace>,
     pub starts_tried: usize,
     pub iterations: usize,
     /// Factor by which the residuals' correlation widened the covariance.
@@ -194,7 +197,7 @@ fn finish(
         .into_iter()
         .filter(|&m| m != Measured::Force || s.with_force)
         .collect();
-    let (fits, stopped) = compare::compare(&params, c, &roles, &channels);
+    let compared = compare::compare(&params, c, &roles, &channels);
     let name = |i: &usize| c.info.tests[*i].name.clone();
     ClosedLoopFit {
         estimation_tests: estimation.iter().map(name).collect(),
@@ -207,8 +210,9 @@ fn finish(
             .as_ref()
             .map(|m| combinations::inseparable(&s.free, m))
             .unwrap_or_default(),
-        fits,
-        stopped,
+        fits: compared.fits,
+        stopped: compared.stopped,
+        traces: compared.traces,
         starts_tried,
         iterations: fit.iterations,
         correlation_factor: factor,

@@ -35,9 +35,10 @@ const NYQUIST_FRACTION: f64 = 0.8;
 /// multiple of the 45-degree frequency: below the valve and the oil column, where the
 /// loop is the first-order servo with feed-forward.
 const LOW_BAND_MULTIPLE: f64 = 1.0;
-/// Feed-forward ratios of the starts read off the 45-degree frequency alone: none, and
-/// a middling one (the loop gain that puts a servo with it at 45 degrees there is then
-/// much lower): the low-band fit is bent by the valve's lag when the valve is slow.
+/// Feed-forward ratios of the starts read off the 45-degree frequency alone, whose loop
+/// gain is `2 pi f45`: none, and a middling one. A servo with a feed-forward above
+/// `3 - 2 sqrt 2` never lags 45 degrees, so where the measured lag reaches it the valve
+/// and the oil column take part, and the low-band fit is bent by them (a slow valve).
 const FEED_FORWARD_STARTS: [f64; 2] = [0.0, 0.5];
 /// Fewest bins of that fit.
 const MIN_LOW_BINS: usize = 3;
@@ -48,8 +49,8 @@ pub struct LoopReading {
     /// Where the measured lag reaches 45 degrees, Hz.
     pub bandwidth_hz: f64,
     /// Loop gains `K` (1/s) and feed-forward ratios `F` of `(K + F s) / (s + K)` to start
-    /// from: the fit below the bandwidth (when it gives `0 <= F < 1`), and for each of
-    /// [`FEED_FORWARD_STARTS`] the `K` that puts the servo at 45 degrees at the bandwidth.
+    /// from: the fit below the bandwidth (when it gives `0 <= F < 1`), and `K = 2 pi f45`
+    /// with each of [`FEED_FORWARD_STARTS`].
     pub loops: Vec<(f64, f64)>,
     /// A resonance above it, Hz, when one shows.
     pub resonance_hz: Option<f64>,
@@ -95,7 +96,7 @@ pub fn read_loop(c: &Campaign, i: usize) -> Option<LoopReading> {
         .collect();
     let mut loops: Vec<(f64, f64)> = servo_with_feed_forward(&low).into_iter().collect();
     let w45 = 2.0 * std::f64::consts::PI * bandwidth_hz;
-    loops.extend(FEED_FORWARD_STARTS.iter().map(|&f| (gain_at_45(w45, f), f)));
+    loops.extend(FEED_FORWARD_STARTS.iter().map(|&f| (w45, f)));
     (bandwidth_hz > 0.0).then_some(LoopReading {
         bandwidth_hz,
         loops,
@@ -103,14 +104,6 @@ pub fn read_loop(c: &Campaign, i: usize) -> Option<LoopReading> {
     })
 }
 
-/// The `K` for which `(K + F s) / (s + K)` lags 45 degrees at `w` rad/s:
-/// `atan(w/K) - atan(F w/K) = pi/4`, i.e. `K^2 - (1 + F) w K + F w^2 = 0` (tangent of
-/// the difference), the larger root.
-fn gain_at_45(w: f64, f: f64) -> f64 {
-    let b = (1.0 + f) * w;
-    let disc = (b * b - 4.0 * f * w * w).max(0.0);
-    (b + disc.sqrt()) / 2.0
-}
 
 /// `K` and `F` of `H = (K + F s) / (s + K)` by linear least squares on `(f, H)` points:
 /// `H s = K (1 - H) + F s`, real and imaginary parts. `None` with too few points or a
@@ -247,17 +240,6 @@ mod tests {
             .collect();
         let (k2, f2) = servo_with_feed_forward(&pts).unwrap();
         assert!((k2 - k).abs() < 1e-9 && (f2 - f).abs() < 1e-9, "{k2} {f2}");
-    }
-
-    #[test]
-    fn the_gain_at_45_degrees_puts_the_servo_there() {
-        for f in [0.0, 0.3, 0.5, 0.8] {
-            let w = 40.0;
-            let k = gain_at_45(w, f);
-            let s = Complex64::new(0.0, w);
-            let lag = -((k + f * s) / (s + k)).arg();
-            assert!((lag - std::f64::consts::FRAC_PI_4).abs() < 1e-9, "F {f}: K {k}, lag {lag}");
-        }
     }
 
     #[test]

@@ -18,7 +18,7 @@ use serde::Serialize;
 /// whose scale here is a convention (the piston area and, without a force channel, the
 /// mass), so a real table's load must not be refused for a conventional scale.
 const SUPPLY_PRESSURE_CONVENTION_PA: f64 = 1e9;
-const SUPPLY_PRESSURE_UNKNOWN: &str = "unknown: the ideal actuator's motion does not      depend on it, and the load pressure's scale is a convention here; the rules' largest      value, so that the envelope check does not refuse a real load on a conventional scale";
+const SUPPLY_PRESSURE_UNKNOWN: &str = "unknown: the ideal actuator's motion does not depend on it, and the load pressure's scale is a convention here; the rules' largest value, so that the envelope check does not refuse a real load on a conventional scale";
 
 /// What is known before the closed-loop fit.
 #[derive(Debug, Clone, Copy)]
