@@ -114,7 +114,7 @@ pub const CLOSED_LOOP_RECORDED_S: f64 = 400.0;
 /// displacement and acceleration recorded and no gains or geometry: synthesis excluded,
 /// `identify` timed (starts, fit, comparison).
 pub fn closed_loop_row() -> BenchRow {
-    use crate::campaign::{ControllerOverride, Geometry};
+    use crate::campaign::ControllerOverride;
     let mut p = Params::trees_lab();
     p.controller.kdp = 0.0;
     p.actuator.leakage_m3_s_pa *= 4.0;
@@ -132,15 +132,9 @@ pub fn closed_loop_row() -> BenchRow {
         random_duration_s: half,
         ..SynthOptions::default()
     };
-    let mut c = synth::synthesise_program(&p, &[(0, base), (1, second)], &opts, None)
-        .unwrap_or_else(|e| panic!("closed-loop benchmark campaign: {e}"));
-    c.info.controller = ControllerOverride::default();
-    c.info.geometry = Geometry::default();
-    for r in &mut c.records {
-        r.valve_command = None;
-        r.spool_position = None;
-        r.force_n = None;
-    }
+    let c = synth::synthesise_program(&p, &[(0, base), (1, second)], &opts, None)
+        .unwrap_or_else(|e| panic!("closed-loop benchmark campaign: {e}"))
+        .as_motion_only();
     let recorded: f64 = (0..c.records.len())
         .map(|i| c.records[i].len() as f64 / c.sample_rate_of(i))
         .sum();

@@ -7,7 +7,7 @@
 //! see.
 
 use shaketable::campaign::synth::{paper_program, synthesise_program, SynthOptions};
-use shaketable::campaign::{Campaign, ControllerOverride, Geometry, TestKind};
+use shaketable::campaign::{Campaign, ControllerOverride, TestKind};
 use shaketable::identify::identify;
 use shaketable::params::ServovalveModel;
 use shaketable::Params;
@@ -64,15 +64,9 @@ fn stripped_campaign(p: &Params, seed: u64) -> Campaign {
         ..SynthOptions::default()
     };
     let program = vec![(0, w1), (1, w2), (5, s1)];
-    let mut c = synthesise_program(p, &program, &opts, None).unwrap_or_else(|e| panic!("{e}"));
-    c.info.controller = ControllerOverride::default();
-    c.info.geometry = Geometry::default();
-    for r in &mut c.records {
-        r.valve_command = None;
-        r.spool_position = None;
-        r.force_n = None;
-    }
-    c
+    synthesise_program(p, &program, &opts, None)
+        .unwrap_or_else(|e| panic!("{e}"))
+        .as_motion_only()
 }
 
 fn combination(id: &shaketable::identify::Identification, name: &str) -> (f64, f64) {

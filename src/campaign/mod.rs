@@ -371,6 +371,20 @@ impl Campaign {
             })
     }
 
+    /// The campaign as a laboratory often has it: only the reference and the table's
+    /// motion recorded (no valve command, spool or force), no gains and no geometry
+    /// written down. For tests and benchmarks of identification from such recordings.
+    pub fn as_motion_only(mut self) -> Campaign {
+        self.info.controller = ControllerOverride::default();
+        self.info.geometry = Geometry::default();
+        for r in &mut self.records {
+            r.valve_command = None;
+            r.spool_position = None;
+            r.force_n = None;
+        }
+        self
+    }
+
     /// Every test's gains are known (what simulating the campaign needs).
     pub fn gains_known(&self) -> Result<(), UnknownGains> {
         self.info

@@ -33,6 +33,22 @@ pub enum GreyParameter {
 
 use GreyParameter::*;
 
+impl GreyParameter {
+    /// Every parameter a closed-loop fit may free.
+    pub const ALL: [GreyParameter; 10] = [
+        DisplacementGain,
+        FlowGain,
+        VelocityFeedForward,
+        DeltaPGain,
+        ValveTimeConstant,
+        BulkModulus,
+        Leakage,
+        TableMass,
+        FrictionForce,
+        YieldDisplacement,
+    ];
+}
+
 /// Smallest leakage the fit searches, m^3/(s Pa): 1e-4 of the TREES Lab value's order,
 /// a damping far below any measurable one (the logarithmic search needs a positive floor).
 const LEAKAGE_FLOOR_M3_S_PA: f64 = 1e-16;
@@ -177,18 +193,7 @@ mod tests {
     #[test]
     fn search_coordinates_round_trip_and_bounds_hold_the_defaults() {
         let p = Params::trees_lab();
-        for g in [
-            DisplacementGain,
-            FlowGain,
-            VelocityFeedForward,
-            DeltaPGain,
-            ValveTimeConstant,
-            BulkModulus,
-            Leakage,
-            TableMass,
-            FrictionForce,
-            YieldDisplacement,
-        ] {
+        for g in GreyParameter::ALL {
             let v = g.get(&p);
             let [lo, hi] = g.bounds(&p);
             assert!(v >= lo && v <= hi, "{}: {v} outside [{lo}, {hi}]", g.key());
