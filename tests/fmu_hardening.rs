@@ -331,7 +331,10 @@ fn the_fmu_binary_exports_fmi_functions_only() {
         .filter_map(|l| l.split_whitespace().nth(2))
         .filter(|s| !s.starts_with("fmi2") && !s.starts_with("fmi3"))
         .collect();
-    assert!(stray.is_empty(), "exported besides fmi2* and fmi3*: {stray:?}");
+    assert!(
+        stray.is_empty(),
+        "exported besides fmi2* and fmi3*: {stray:?}"
+    );
     // the FMI 2.0 functions and, for ShakeTable3.fmu, the FMI 3.0 ones
     assert!(text.contains("fmi2DoStep") && text.contains("fmi3DoStep"));
 }

@@ -113,7 +113,10 @@ fn recovers(variant: u64, valve_tolerance: f64, oil_tolerance: f64) {
         let p = truth(variant);
         let c = stripped_campaign(&p, 11 + variant);
         let id = identify(&c);
-        let cl = id.closed_loop.as_ref().unwrap_or_else(|| panic!("{:?}", id.missing));
+        let cl = id
+            .closed_loop
+            .as_ref()
+            .unwrap_or_else(|| panic!("{:?}", id.missing));
         let loop_gain = p.controller.kp * p.actuator.flow_gain_m3_s / p.actuator.piston_area_m2;
         let ff = p.controller.fv * p.actuator.flow_gain_m3_s / p.actuator.piston_area_m2;
         let oil = shaketable::linear::OilColumn::of(&p);
@@ -141,10 +144,17 @@ fn recovers(variant: u64, valve_tolerance: f64, oil_tolerance: f64) {
             );
         }
         // the test it did not see is predicted
-        let val: Vec<_> = cl.fits.iter().filter(|f| f.role == shaketable::identify::greybox::Role::Validation).collect();
+        let val: Vec<_> = cl
+            .fits
+            .iter()
+            .filter(|f| f.role == shaketable::identify::greybox::Role::Validation)
+            .collect();
         assert!(!val.is_empty(), "no validation test: {:?}", cl.fits);
         for f in val {
-            eprintln!("variant {variant}: {} {} fit {:.2} %", f.test, f.channel, f.fit_percent);
+            eprintln!(
+                "variant {variant}: {} {} fit {:.2} %",
+                f.test, f.channel, f.fit_percent
+            );
             assert!(f.fit_percent > 90.0, "{f:?}");
         }
     }

@@ -86,13 +86,27 @@ fn identification_says_what_it_cannot_tell_and_why() {
     assert!(id.servovalve.is_none() && id.mass_kg.is_none() && id.oil_column.is_none());
     // what the motion cannot separate is held by a stated convention, listed with why
     let keys: Vec<&str> = id.defaults().iter().map(|(k, _)| *k).collect();
-    for k in ["actuator.piston_area_m2", "actuator.flow_gain_m3_s", "controller.kv"] {
+    for k in [
+        "actuator.piston_area_m2",
+        "actuator.flow_gain_m3_s",
+        "controller.kv",
+    ] {
         assert!(keys.contains(&k), "{k} not listed as a default: {keys:?}");
     }
     // the gain nobody wrote down is fitted on the closed loop, with its uncertainty
-    let cl = id.closed_loop.as_ref().unwrap_or_else(|| panic!("{:?}", id.missing));
-    let kp = cl.estimates.iter().find(|e| e.key == "controller.kp").unwrap();
-    assert!(kp.value > 0.0 && kp.sigma.is_some_and(|s| s > 0.0), "{kp:?}");
+    let cl = id
+        .closed_loop
+        .as_ref()
+        .unwrap_or_else(|| panic!("{:?}", id.missing));
+    let kp = cl
+        .estimates
+        .iter()
+        .find(|e| e.key == "controller.kp")
+        .unwrap();
+    assert!(
+        kp.value > 0.0 && kp.sigma.is_some_and(|s| s > 0.0),
+        "{kp:?}"
+    );
     assert!(!keys.contains(&"controller.kp"), "{keys:?}");
     assert!(!id.missing.is_empty());
     // the diagnosis needs the gains to simulate: a clear refusal, not a default
@@ -193,14 +207,23 @@ fn the_damper_force_is_identified_on_the_chirp_and_checked_on_the_random_run() {
 /// random run it never saw.
 fn closed_loop_predicts_the_random_run(id: &shaketable::identify::Identification) {
     use shaketable::identify::greybox::Role;
-    let cl = id.closed_loop.as_ref().unwrap_or_else(|| panic!("{:?}", id.missing));
+    let cl = id
+        .closed_loop
+        .as_ref()
+        .unwrap_or_else(|| panic!("{:?}", id.missing));
     assert_eq!(cl.estimation_tests, ["chirp-0A"]);
     assert_eq!(cl.validation_tests, ["15Hz-0A"]);
     for f in &cl.fits {
-        eprintln!("closed loop: {} {} ({:?}) fit {:.2} %", f.test, f.channel, f.role, f.fit_percent);
+        eprintln!(
+            "closed loop: {} {} ({:?}) fit {:.2} %",
+            f.test, f.channel, f.role, f.fit_percent
+        );
     }
     for c in &cl.combinations {
-        eprintln!("closed loop: {} = {:.4} +- {:?} {}", c.name, c.value, c.sigma, c.unit);
+        eprintln!(
+            "closed loop: {} = {:.4} +- {:?} {}",
+            c.name, c.value, c.sigma, c.unit
+        );
     }
     let fit = |test: &str, role| {
         cl.fits
@@ -213,8 +236,15 @@ fn closed_loop_predicts_the_random_run(id: &shaketable::identify::Identification
     assert!(fit("chirp-0A", Role::Estimation) > 87.0);
     assert!(fit("15Hz-0A", Role::Validation) > 89.0);
     // the loop's bandwidth of a small actuator, and an uncertainty for it
-    let gain = cl.combinations.iter().find(|c| c.name == "loop_gain_1_s").unwrap();
-    assert!(gain.value > 5.0 && gain.value < 500.0 && gain.sigma.is_some(), "{gain:?}");
+    let gain = cl
+        .combinations
+        .iter()
+        .find(|c| c.name == "loop_gain_1_s")
+        .unwrap();
+    assert!(
+        gain.value > 5.0 && gain.value < 500.0 && gain.sigma.is_some(),
+        "{gain:?}"
+    );
 }
 
 #[test]

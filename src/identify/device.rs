@@ -331,7 +331,8 @@ pub fn fit_device(c: &Campaign, roles: &DeviceRoles) -> Result<DeviceFit, Identi
         .iter()
         .map(|&i| {
             let n = c.info.tests[i].name.as_str();
-            Kinematics::of(n, &c.records[i], c.sample_rate_of(i)).map(|ko| test_fit(n, &ko, p, true))
+            Kinematics::of(n, &c.records[i], c.sample_rate_of(i))
+                .map(|ko| test_fit(n, &ko, p, true))
         })
         .collect::<Vec<_>>();
     Ok(DeviceFit {

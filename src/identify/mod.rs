@@ -309,9 +309,8 @@ pub fn identify_screened(s: &Screening) -> Identification {
         oil_column: oil.is_some(),
         friction: friction.is_some(),
     };
-    let closed_loop = closed_loop(c, &p, known, &unknown_inputs).and_then(|r| {
-        r.map_err(|e| note(Err(e))).ok()
-    });
+    let closed_loop =
+        closed_loop(c, &p, known, &unknown_inputs).and_then(|r| r.map_err(|e| note(Err(e))).ok());
     if let Some(cl) = &closed_loop {
         p = cl.params;
     }

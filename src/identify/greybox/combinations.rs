@@ -28,21 +28,33 @@ type Formula = fn(&Params) -> f64;
 
 /// Every combination: name, unit, meaning, formula, and the free parameters it needs
 /// (reported only when the fit freed one of them).
-fn catalogue() -> Vec<(&'static str, &'static str, &'static str, Formula, &'static [GreyParameter])> {
+fn catalogue() -> Vec<(
+    &'static str,
+    &'static str,
+    &'static str,
+    Formula,
+    &'static [GreyParameter],
+)> {
     use GreyParameter::*;
     vec![
         (
             "loop_gain_1_s",
             "1/s",
             "Kp Ks Kq / A: the displacement loop's gain (its bandwidth is loop_gain / 2 pi)",
-            |p| p.controller.kp * p.servovalve.gain * p.actuator.flow_gain_m3_s / p.actuator.piston_area_m2,
+            |p| {
+                p.controller.kp * p.servovalve.gain * p.actuator.flow_gain_m3_s
+                    / p.actuator.piston_area_m2
+            },
             &[DisplacementGain, FlowGain],
         ),
         (
             "feed_forward_ratio",
             "1",
             "Fv Ks Kq / A: the share of the reference velocity fed forward to the valve",
-            |p| p.controller.fv * p.servovalve.gain * p.actuator.flow_gain_m3_s / p.actuator.piston_area_m2,
+            |p| {
+                p.controller.fv * p.servovalve.gain * p.actuator.flow_gain_m3_s
+                    / p.actuator.piston_area_m2
+            },
             &[VelocityFeedForward, FlowGain],
         ),
         (

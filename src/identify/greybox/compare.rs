@@ -17,7 +17,11 @@ use serde::Serialize;
 
 /// The channels an output-error fit compares: the table's motion and, where recorded,
 /// the actuator force.
-pub const COMPARED: [Measured; 3] = [Measured::Displacement, Measured::Acceleration, Measured::Force];
+pub const COMPARED: [Measured; 3] = [
+    Measured::Displacement,
+    Measured::Acceleration,
+    Measured::Force,
+];
 
 /// What a test was used for in the fit whose figures are reported.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize)]
@@ -59,7 +63,14 @@ pub struct Trace {
     pub simulated: Vec<f64>,
 }
 
-fn trace(test: &str, channel: &'static str, role: Role, fs: f64, meas: &[f64], sim: &[f64]) -> Trace {
+fn trace(
+    test: &str,
+    channel: &'static str,
+    role: Role,
+    fs: f64,
+    meas: &[f64],
+    sim: &[f64],
+) -> Trace {
     let n = ((TRACE_S * fs) as usize).min(meas.len()).min(sim.len());
     let stride = n.div_ceil(TRACE_POINTS).max(1);
     let (mm, ms) = (mean(meas), mean(sim));
@@ -167,7 +178,12 @@ pub struct Comparison {
 
 /// Per test of `tests` (with its role) and channel of `channels` it recorded: the fit of
 /// `p`. A test whose simulation stopped is reported with the reason.
-pub fn compare(p: &Params, c: &Campaign, tests: &[(usize, Role)], channels: &[Measured]) -> Comparison {
+pub fn compare(
+    p: &Params,
+    c: &Campaign,
+    tests: &[(usize, Role)],
+    channels: &[Measured],
+) -> Comparison {
     let runs: Vec<(usize, Role, Result<Vec<Outputs>, String>)> = tests
         .par_iter()
         .map(|&(i, role)| (i, role, simulate_as_run(p, c, i)))
@@ -188,7 +204,8 @@ pub fn compare(p: &Params, c: &Campaign, tests: &[(usize, Role)], channels: &[Me
             let s: Vec<f64> = sim.iter().map(|o| simulated(o, m)).collect();
             if let Some((e, rms)) = nrmse(meas, &s) {
                 let test = &c.info.tests[i].name;
-                out.traces.push(trace(test, m.name(), role, c.sample_rate_of(i), meas, &s));
+                out.traces
+                    .push(trace(test, m.name(), role, c.sample_rate_of(i), meas, &s));
                 out.fits.push(ChannelFit {
                     test: test.clone(),
                     channel: m.name(),
@@ -221,6 +238,9 @@ mod tests {
         // half the amplitude: NRMSE 0.5, fit 50 %
         let half: Vec<f64> = y.iter().map(|v| 0.5 * (v - 5.0)).collect();
         assert!((nrmse(&y, &half).unwrap().0 - 0.5).abs() < 1e-3);
-        assert!(nrmse(&flat, &y).is_none(), "a flat measured channel has no NRMSE");
+        assert!(
+            nrmse(&flat, &y).is_none(),
+            "a flat measured channel has no NRMSE"
+        );
     }
 }

@@ -146,9 +146,20 @@ pub fn fit_closed_loop(
     })?;
     let full = targets(c, &estimation, &s, None);
     let fit = run_lsq(&q, c, &full, &s.free, FINAL_ITERATIONS).ok_or_else(|| {
-        IdentifyError::not_usable("closed loop not identified: the fit's simulation left the operating envelope")
+        IdentifyError::not_usable(
+            "closed loop not identified: the fit's simulation left the operating envelope",
+        )
     })?;
-    Ok(finish(c, &s, &q, &fit, &full, estimation, validation, starts.len()))
+    Ok(finish(
+        c,
+        &s,
+        &q,
+        &fit,
+        &full,
+        estimation,
+        validation,
+        starts.len(),
+    ))
 }
 
 /// Assemble the result from the final fit.
@@ -234,13 +245,19 @@ fn starting_points(p: &Params, c: &Campaign, estimation: &[usize], s: &Structure
     };
     let loop_free = what.through_kp || s.free.contains(&FlowGain);
     let bases: Vec<Params> = match loop_free {
-        true => reading.loops.iter().map(|&l| start::with_loop(p, &reading, l, what)).collect(),
+        true => reading
+            .loops
+            .iter()
+            .map(|&l| start::with_loop(p, &reading, l, what))
+            .collect(),
         false => vec![*p],
     };
     if !s.free.contains(&BulkModulus) {
         return bases;
     }
-    let rate = estimation.first().map_or(c.info.sample_rate_hz, |&i| c.sample_rate_of(i));
+    let rate = estimation
+        .first()
+        .map_or(c.info.sample_rate_hz, |&i| c.sample_rate_of(i));
     let oil = start::oil_column_starts(&reading, rate);
     bases
         .iter()
@@ -270,7 +287,14 @@ fn targets(c: &Campaign, tests: &[usize], s: &Structure, excerpt_s: Option<f64>)
             let stride = samples.div_ceil(MAX_RESIDUALS_PER_CHANNEL).max(1);
             let measured: Vec<f64> = y.iter().step_by(stride).map(|v| v - mean).collect();
             let weight = 1.0 / (rms * (measured.len() as f64).sqrt());
-            out.push(Target { test: i, channel: m, measured, stride, samples, weight });
+            out.push(Target {
+                test: i,
+                channel: m,
+                measured,
+                stride,
+                samples,
+                weight,
+            });
         }
     }
     out
@@ -285,7 +309,11 @@ fn residuals(p: &Params, c: &Campaign, targets: &[Target]) -> Option<Vec<f64>> {
     tests.dedup();
     let runs: Vec<(usize, Vec<crate::model::Outputs>)> = tests
         .par_iter()
-        .map(|&(i, n)| simulate_prefix(p, c, i, n, Checks::DivergenceOnly).ok().map(|o| (i, o)))
+        .map(|&(i, n)| {
+            simulate_prefix(p, c, i, n, Checks::DivergenceOnly)
+                .ok()
+                .map(|o| (i, o))
+        })
         .collect::<Option<_>>()?;
     let mut r = Vec::new();
     for t in targets {

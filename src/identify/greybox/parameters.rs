@@ -126,7 +126,10 @@ impl GreyParameter {
             DisplacementGain => DISPLACEMENT_GAIN_1_M,
             FlowGain => [1e-6, 100.0],
             // up to twice the feed-forward that alone would give the reference velocity
-            VelocityFeedForward => [0.0, 2.0 * a.piston_area_m2 / (a.flow_gain_m3_s * p.servovalve.gain)],
+            VelocityFeedForward => [
+                0.0,
+                2.0 * a.piston_area_m2 / (a.flow_gain_m3_s * p.servovalve.gain),
+            ],
             // as much damping through the valve as the largest leakage searched
             DeltaPGain => [0.0, LEAKAGE_CEILING_M3_S_PA / flow_per_force(p)],
             ValveTimeConstant => VALVE_TIME_CONSTANT_S,
@@ -174,7 +177,8 @@ impl GreyParameter {
 /// Flow per unit load pressure and unit Kdp at low frequency, `Ks Kq A` (spec sections 2-4:
 /// `Kdp F_A = Kdp A P_L` commands the valve, whose flow is `Ks Kq` per unit command).
 fn flow_per_force(p: &Params) -> f64 {
-    (p.servovalve.gain * p.actuator.flow_gain_m3_s * p.actuator.piston_area_m2).max(f64::MIN_POSITIVE)
+    (p.servovalve.gain * p.actuator.flow_gain_m3_s * p.actuator.piston_area_m2)
+        .max(f64::MIN_POSITIVE)
 }
 
 /// `p` with the free parameters set from search coordinates `theta`.

@@ -63,7 +63,10 @@ pub fn read_loop(c: &Campaign, i: usize) -> Option<LoopReading> {
     let rec = &c.records[i];
     let fs = c.sample_rate_of(i);
     let (input, output) = match (&rec.displacement_m, &rec.acceleration_m_s2) {
-        (Some(x), _) if c.info.tests[i].control == Control::Displacement || rec.acceleration_m_s2.is_none() => {
+        (Some(x), _)
+            if c.info.tests[i].control == Control::Displacement
+                || rec.acceleration_m_s2.is_none() =>
+        {
             (&rec.ref_displacement_m, x)
         }
         (_, Some(a)) => (&rec.ref_acceleration_m_s2, a),
@@ -103,7 +106,6 @@ pub fn read_loop(c: &Campaign, i: usize) -> Option<LoopReading> {
         resonance_hz,
     })
 }
-
 
 /// `K` and `F` of `H = (K + F s) / (s + K)` by linear least squares on `(f, H)` points:
 /// `H s = K (1 - H) + F s`, real and imaginary parts. `None` with too few points or a

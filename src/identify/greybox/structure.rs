@@ -125,9 +125,21 @@ pub fn choose(p: &mut Params, c: &Campaign, tests: &[usize], known: Known) -> St
         );
     }
     let geometry = [
-        ("actuator.piston_area_m2", g.piston_area_m2, p.actuator.piston_area_m2),
-        ("actuator.total_oil_volume_m3", g.total_oil_volume_m3, p.actuator.total_oil_volume_m3),
-        ("actuator.flow_gain_m3_s", g.flow_gain_m3_s, p.actuator.flow_gain_m3_s),
+        (
+            "actuator.piston_area_m2",
+            g.piston_area_m2,
+            p.actuator.piston_area_m2,
+        ),
+        (
+            "actuator.total_oil_volume_m3",
+            g.total_oil_volume_m3,
+            p.actuator.total_oil_volume_m3,
+        ),
+        (
+            "actuator.flow_gain_m3_s",
+            g.flow_gain_m3_s,
+            p.actuator.flow_gain_m3_s,
+        ),
     ];
     for (key, given, value) in geometry {
         let freed = free.iter().any(|f| f.key() == key);
