@@ -205,7 +205,7 @@ proptest! {
         match shaketable::diagnose::diagnose(&c, None) {
             Ok(d) => {
                 check(&d.identification);
-                prop_assert!(d.gain.is_finite() || d.cause.is_none());
+                prop_assert!(d.gain.is_finite() || d.cause().is_none());
             }
             Err(e) => prop_assert!(e.contains("refused"), "{e}"),
         }

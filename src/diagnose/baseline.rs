@@ -208,20 +208,31 @@ fn refinement_range(p: &Params, which: BaselineParameter) -> Range {
     range_within(p, which, which.refinement_width())
 }
 
+/// What [`refine_output_error`] gives: the cost, the refined parameters, the iterations
+/// used, and the effect's one-sigma uncertainties and fitting bounds (empty without one).
+pub(super) struct Refined {
+    pub cost: f64,
+    pub params: Params,
+    pub iterations: usize,
+    pub effect_sigma: Vec<f64>,
+    pub effect_bounds: (Vec<f64>, Vec<f64>),
+}
+
 /// Output-error refinement of `p0` on the fitting halves of `tests`: the baseline
 /// parameters of [`REFINED`], [`REFINED_FRICTION`] and the valve dynamics within their
 /// refinement ranges, and, with `effect`, that effect's parameters from `theta0`
-/// (held for stick-slip, whose chatter the deterministic residual does not see). Returns
-/// the cost, the refined parameters and the iterations used (capped at `iterations`: a
-/// baseline that lacks an effect does not converge and need not).
+/// (held for stick-slip, whose chatter the deterministic residual does not see) within
+/// their bounds for the table `table`. The iterations are capped at `iterations`: a
+/// baseline that lacks an effect does not converge and need not.
 pub(super) fn refine_output_error(
     c: &Campaign,
     p0: &Params,
     effect: Option<(Effect, &[f64])>,
+    table: &Params,
     tests: &[usize],
     whitening: &Whitening,
     iterations: usize,
-) -> Option<(f64, Params, usize)> {
+) -> Option<Refined> {
     let free: Vec<BaselineParameter> = REFINED
         .iter()
         .chain(&REFINED_FRICTION)
@@ -234,7 +245,7 @@ pub(super) fn refine_output_error(
         _ => (None, Vec::new()),
     };
     let ne = theta_e.len();
-    let (elo, ehi) = e.map(|e| e.bounds()).unwrap_or_default();
+    let (elo, ehi) = e.map(|e| e.bounds(table)).unwrap_or_default();
     let assemble = |t: &[f64]| {
         let mut p = *p0;
         if let Some(e) = e {
@@ -263,7 +274,13 @@ pub(super) fn refine_output_error(
             parallel: false,
         },
     )?;
-    Some((fit.cost, assemble(&fit.theta), fit.iterations))
+    Some(Refined {
+        cost: fit.cost,
+        params: assemble(&fit.theta),
+        iterations: fit.iterations,
+        effect_sigma: fit.sigma[..ne].to_vec(),
+        effect_bounds: (elo, ehi),
+    })
 }
 
 /// Output-error iterations of the baseline's refinement: a baseline that lacks an effect

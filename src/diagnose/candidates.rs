@@ -5,9 +5,10 @@ use super::baseline::{
     candidate_range, copy_baseline, residual_vector, BaselineParameter, Range, REFINED,
 };
 use super::effect::Effect;
-use super::output::Candidate;
+use super::evidence::not_evidence;
+use super::output::{Candidate, PartRows};
 use super::part::Part;
-use super::residuals::{NoiseFloor, Whitening};
+use super::residuals::{CellScores, NoiseFloor, Whitening};
 use super::starts::{indices, informed_start, starts};
 use super::stick_slip::fit_stick_slip;
 use super::{residuals, trace_enabled};
@@ -15,30 +16,32 @@ use crate::campaign::Campaign;
 use crate::identify::lsq::{minimise, LsqOptions};
 use crate::params::Params;
 use rayon::prelude::*;
+use std::collections::BTreeMap;
 
 /// Predictive scores and standardised residuals (see [`residuals`]) of `p` on the
-/// held-out part of `tests`, per test and channel. A candidate is held to the operating
-/// envelope (`envelope`: [`residuals::test_scores_in_envelope`]); the baseline is not, so
-/// a baseline that passes the relief pressure where the table did not still gives the
-/// finite residual that measures the gain.
+/// selection and report quarters of every test, per test and channel, from one
+/// prediction per test. A candidate is held to the operating envelope (`envelope`:
+/// [`residuals::test_scores_in_envelope`]); the baseline is not, so a baseline that
+/// passes the relief pressure where the table did not still gives the finite residual
+/// that measures the gain.
 pub(super) fn heldout_scores(
     p: &Params,
     c: &Campaign,
     tests: &[usize],
     noise: &NoiseFloor,
     envelope: bool,
-) -> (Vec<[f64; 5]>, Vec<[f64; 5]>) {
-    tests
+) -> (PartRows, PartRows) {
+    let cells: Vec<Vec<CellScores>> = tests
         .par_iter()
         .map(|&i| {
-            let s = if envelope {
-                residuals::test_scores_in_envelope(p, c, i, Part::HeldOut, noise)
-            } else {
-                residuals::test_scores(p, c, i, Part::HeldOut, noise)
-            };
-            (s.score, s.residual)
+            residuals::test_scores_of_parts(p, c, i, &[Part::Select, Part::Report], noise, envelope)
         })
-        .unzip()
+        .collect();
+    let rows = |k: usize| PartRows {
+        score: cells.iter().map(|s| s[k].score).collect(),
+        residual: cells.iter().map(|s| s[k].residual).collect(),
+    };
+    (rows(0), rows(1))
 }
 
 /// Polishing rounds (of 6 output-error iterations) of the best candidate at most.
@@ -87,16 +90,20 @@ pub(super) fn fit_candidate(
         return Some(scored_candidate(
             e,
             c,
-            &theta,
-            cost.sqrt(),
-            p,
+            Fitted {
+                theta: &theta,
+                sigma: &[],
+                bounds: &e.bounds(&bases[0]),
+                fit_residual: cost.sqrt(),
+                params: p,
+            },
             heldout_idx,
             noise,
         ));
     }
     let ne = e.parameters().len();
     let free = &REFINED[..];
-    let (elo, ehi) = e.bounds();
+    let (elo, ehi) = e.bounds(&bases[0]);
     let ranges: Vec<Range> = free.iter().map(|&w| candidate_range(bases, w)).collect();
     let base = &bases[0];
     // the effect's parameters, then the free baseline ones; the other baseline
@@ -180,7 +187,7 @@ pub(super) fn fit_candidate(
         trace(&format!("start from the data: {s:?}"));
         all.push(start_on(&bases[1], &s));
     }
-    let mut best: Option<(f64, Vec<f64>, Params)> = None;
+    let mut best: Option<(f64, Vec<f64>, Vec<f64>, Params)> = None;
     for (t0, fixed) in all {
         let scale: Vec<f64> = t0[..ne]
             .iter()
@@ -227,56 +234,87 @@ pub(super) fn fit_candidate(
                 f.iterations, f.cost
             ));
             if best.as_ref().map(|b| f.cost < b.0).unwrap_or(true) {
-                best = Some((f.cost, f.theta, fixed));
+                best = Some((f.cost, f.theta, f.sigma, fixed));
             }
         }
     }
-    let (cost, theta, fixed) = best?;
+    let (cost, theta, sigma, fixed) = best?;
     let p = assemble(&theta, &fixed);
     Some(scored_candidate(
         e,
         c,
-        &theta[..ne],
-        cost.sqrt(),
-        p,
+        Fitted {
+            theta: &theta[..ne],
+            sigma: &sigma[..ne],
+            bounds: &(elo.clone(), ehi.clone()),
+            fit_residual: cost.sqrt(),
+            params: p,
+        },
         heldout_idx,
         noise,
     ))
 }
 
 impl Candidate {
-    /// Its held-out residual and score over the cells `masked` keeps (the baseline's
-    /// missed cells), the score with a penalty of 1 % per parameter.
-    pub(super) fn summarise(&mut self, masked: &dyn Fn(&[[f64; 5]]) -> f64) {
-        self.heldout_residual = masked(&self.heldout_rows);
-        self.score = masked(&self.score_rows) * (1.0 + 0.01 * self.parameters.len() as f64);
+    /// Its selection residual and score over the cells `select_mask` keeps (the cells the
+    /// model it extends misses), the score with a penalty of 1 % per parameter, and its
+    /// report residual over the cells `report_mask` keeps (the baseline's missed ones).
+    pub(super) fn summarise(
+        &mut self,
+        select_mask: &dyn Fn(&[[f64; 5]]) -> f64,
+        report_mask: &dyn Fn(&[[f64; 5]]) -> f64,
+    ) {
+        self.select_residual = select_mask(&self.select.residual);
+        self.score = select_mask(&self.select.score) * (1.0 + 0.01 * self.parameters.len() as f64);
+        self.report_residual = report_mask(&self.report.residual);
     }
 }
 
-/// A fitted candidate with its held-out rows (summarised by [`Candidate::summarise`]).
+/// What a fit gives a candidate: the effect's parameters and their one-sigma
+/// uncertainties (empty when the fit gives none), the fit's RMS residual, the model.
+pub(super) struct Fitted<'a> {
+    pub theta: &'a [f64],
+    pub sigma: &'a [f64],
+    /// The fitting range it was fitted in: lower and upper bounds, one per parameter.
+    pub bounds: &'a (Vec<f64>, Vec<f64>),
+    pub fit_residual: f64,
+    pub params: Params,
+}
+
+/// A fitted candidate with its held-out rows (summarised by [`Candidate::summarise`]) and
+/// whether it is evidence of its effect ([`not_evidence`], within its fitting bounds).
 pub(super) fn scored_candidate(
     e: Effect,
     c: &Campaign,
-    theta: &[f64],
-    fit_residual: f64,
-    p: Params,
+    fitted: Fitted,
     heldout_idx: &[usize],
     noise: &NoiseFloor,
 ) -> Candidate {
-    let (score_rows, rows) = heldout_scores(&p, c, heldout_idx, noise, true);
+    let p = fitted.params;
+    let (select, report) = heldout_scores(&p, c, heldout_idx, noise, true);
+    let keyed = |v: &[f64]| -> BTreeMap<String, f64> {
+        e.parameters()
+            .iter()
+            .zip(v)
+            .filter(|(_, x)| x.is_finite())
+            .map(|(k, x)| (k.to_string(), *x))
+            .collect()
+    };
+    let parameters = keyed(fitted.theta);
+    let sigma = keyed(fitted.sigma);
+    let (lower, upper) = fitted.bounds;
+    let why = not_evidence(e, &parameters, &sigma, lower, upper);
     Candidate {
         effect: e,
-        parameters: e
-            .parameters()
-            .iter()
-            .zip(theta)
-            .map(|(k, v)| (k.to_string(), *v))
-            .collect(),
-        heldout_residual: f64::NAN,
+        parameters,
+        sigma,
+        select_residual: f64::NAN,
         score: f64::NAN,
-        fit_residual,
+        report_residual: f64::NAN,
+        fit_residual: fitted.fit_residual,
+        not_evidence: why,
         params: p,
-        heldout_rows: rows,
-        score_rows,
+        select,
+        report,
     }
 }

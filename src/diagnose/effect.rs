@@ -1,6 +1,8 @@
 //! The catalogue effects diagnosis fits (spec section 7): names, parameters, where
 //! their signature lives, how they are read from and applied to parameters, fitting bounds.
 
+use super::residuals::{measured, CHANNELS};
+use crate::campaign::Campaign;
 use crate::params::Params;
 use serde::Serialize;
 
@@ -44,6 +46,35 @@ impl Effect {
         self.catalogue().parameters.iter().map(|q| q.key).collect()
     }
 
+    /// The values of its parameters at which it vanishes ([`crate::effects::Effect::no_effect`]).
+    pub(super) fn no_effect(self) -> &'static [(&'static str, f64)] {
+        self.catalogue().no_effect
+    }
+
+    /// Whether `c` records what its signature needs ([`crate::effects::Effect::signature_channels`]):
+    /// `Err` names the alternatives when it does not (the effect is not testable).
+    pub(super) fn testable(self, c: &Campaign) -> Result<(), String> {
+        let recorded = |name: &str| {
+            CHANNELS
+                .iter()
+                .position(|&ch| ch == name)
+                .is_some_and(|ch| c.records.iter().any(|r| measured(r, ch).is_some()))
+        };
+        let alternatives = self.catalogue().signature_channels;
+        if alternatives
+            .iter()
+            .any(|set| set.iter().all(|ch| recorded(ch)))
+        {
+            return Ok(());
+        }
+        let needs: Vec<String> = alternatives.iter().map(|set| set.join(" and ")).collect();
+        Err(format!(
+            "{} not testable: its signature needs the {} channel, and no test recorded it",
+            self.name(),
+            needs.join(" or the ")
+        ))
+    }
+
     /// The fitting tests where its signature lives.
     pub(super) fn signature_tests(self) -> &'static [&'static str] {
         self.catalogue().signature_tests
@@ -67,9 +98,9 @@ impl Effect {
         }
     }
 
-    /// The fitting bounds, lower and upper, one per parameter.
-    pub(super) fn bounds(self) -> (Vec<f64>, Vec<f64>) {
-        let ranges = self.catalogue().fit_bounds(&Params::trees_lab());
+    /// The fitting bounds for `table`, lower and upper, one per parameter.
+    pub(super) fn bounds(self, table: &Params) -> (Vec<f64>, Vec<f64>) {
+        let ranges = self.catalogue().fit_bounds(table);
         (
             ranges.iter().map(|r| r.lower).collect(),
             ranges.iter().map(|r| r.upper).collect(),

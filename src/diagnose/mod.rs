@@ -1,5 +1,6 @@
 //! Diagnosis: what the identified baseline misses, which catalogue effect (spec section 7)
-//! causes it, the effect's parameters, and the gain on tests it was not fitted on.
+//! causes it (several at once), the effects' parameters, the gain on data no step saw,
+//! and where the residual left lies.
 //!
 //! Method:
 //! 1. Baseline from [`crate::identify`] (structure from the data: valve order from the
@@ -19,13 +20,21 @@
 //!    saturation, small grids for the deadband) by output-error least squares; stick-slip
 //!    from the friction-velocity curve of the slow tests ([`stribeck`]), polished on the
 //!    predictive score (its chatter has no reproducible phase).
-//! 5. The best candidate by held-out score on the cells the baseline misses is the cause
-//!    when it divides the baseline's score by at least [`REQUIRED_GAIN`]; `explained`
-//!    when its standardised residual there is within [`EXPLAINED_RATIO`].
+//! 5. The best candidate by score on the cells the current model misses in the
+//!    selection quarter is a cause when it divides that model's score by at least
+//!    [`REQUIRED_GAIN`], is physical and is evidence (no parameter at a bound, its
+//!    strength significant: [`evidence`]); then the search repeats with the causes in the
+//!    model ([`pipeline::MAX_CAUSES`] at most). A candidate with the gain but no evidence
+//!    is listed as a partial explanation.
+//! 6. The gain and `explained` on the report quarter only, which no fit and no decision
+//!    saw ([`Part`]); `explained` when every report cell the baseline missed is within
+//!    [`EXPLAINED_RATIO`]; otherwise the cells still missed are located ([`locate`]).
 
 mod baseline;
 mod candidates;
 mod effect;
+mod evidence;
+mod locate;
 mod output;
 mod part;
 mod pipeline;
@@ -35,7 +44,8 @@ mod stick_slip;
 pub mod stribeck;
 
 pub use effect::{Effect, EFFECTS};
-pub use output::{Candidate, Diagnosis};
+pub use locate::{Dependence, Split};
+pub use output::{Candidate, Cause, Diagnosis, PartRows, Partial, UnexplainedCell};
 pub use part::Part;
 
 pub use residuals::{
@@ -52,10 +62,12 @@ pub fn trace_enabled() -> bool {
     std::env::var_os("SHAKETABLE_TRACE").is_some()
 }
 
-/// A candidate must divide the baseline's held-out residual by at least this to be named.
+/// A candidate must divide the predictive score of the model it extends, on the cells
+/// that model misses in the selection quarter, by at least this to be named.
 pub const REQUIRED_GAIN: f64 = 1.25;
-/// Held-out residual (RMS over channels and tests, in noise units) at or below which the
-/// extended model counts as explaining the data.
+/// Report-quarter residual of a cell (in noise units) at or below which the extended
+/// model counts as explaining it; the data is explained when every cell the baseline
+/// missed is.
 pub const EXPLAINED_RATIO: f64 = 2.0;
 /// A held-out (test, channel) cell whose baseline residual exceeds this many noise RMS is
 /// one the baseline misses; with no such cell the data is at the noise floor (`none`).
@@ -70,21 +82,29 @@ pub type Progress<'a> = &'a (dyn Fn(usize, usize, &str) + Sync);
 /// the "effect" is a fit absorbing garbage, not a physical body on or under the table.
 pub const MAX_ADDED_MASS_RATIO: f64 = 100.0;
 
-/// Why the baseline identification cannot support a diagnosis, if it cannot: every part
-/// of the baseline must be identified, or the candidates would explain the defaults.
-fn baseline_gaps(id: &Identification) -> Option<String> {
-    let gaps: Vec<&str> = [
+/// Why the baseline identification cannot support a diagnosis of `c`, if it cannot:
+/// every part of the baseline must be identified, or the candidates would explain the
+/// defaults, and every test's gains known to simulate it. The closed-loop fit (issue 16
+/// part 3) supplies both when section 4 could not: its model is the baseline then.
+fn baseline_gaps(c: &Campaign, id: &Identification) -> Option<String> {
+    if id.closed_loop.is_some() {
+        return None;
+    }
+    let mut gaps: Vec<String> = [
         (id.servovalve.is_none(), "servovalve"),
         (id.mass_kg.is_none(), "mass"),
         (id.friction.is_none(), "Bouc-Wen friction"),
         (id.oil_column.is_none(), "oil column"),
     ]
     .into_iter()
-    .filter_map(|(m, n)| m.then_some(n))
+    .filter_map(|(m, n)| m.then(|| n.to_string()))
     .collect();
+    if let Err(e) = c.gains_known() {
+        gaps.push(format!("controller gains ({e})"));
+    }
     (!gaps.is_empty()).then(|| {
         format!(
-            "diagnosis refused: the baseline identification lacks the {} ({})",
+            "diagnosis refused: the baseline identification lacks the {} and no closed-loop fit replaced it ({})",
             gaps.join(", "),
             id.missing.join("; ")
         )
@@ -108,14 +128,14 @@ fn unphysical(b: &Candidate, table_mass_kg: f64) -> Option<String> {
     })
 }
 
-/// Diagnose a campaign (see the module doc) after screening its records; refused (with
-/// the reason) when the baseline identification is incomplete.
+/// Diagnose a campaign (see the module doc) after screening its records, on the channels
+/// it recorded (an effect whose signature needs a missing channel is not testable);
+/// refused (with the reason) when neither section 4 nor the closed-loop fit gives a
+/// complete baseline.
 pub fn diagnose(c: &Campaign, progress: Option<Progress>) -> Result<Diagnosis, String> {
-    // every comparison simulates the tests with their gains
-    c.gains_known().map_err(|e| e.to_string())?;
     let screened = screen(c);
     let id = identify_screened(&screened);
-    if let Some(why) = baseline_gaps(&id) {
+    if let Some(why) = baseline_gaps(&screened.campaign, &id) {
         return Err(why);
     }
     Ok(pipeline::diagnose_with(&screened.campaign, id, progress))
@@ -124,25 +144,17 @@ pub fn diagnose(c: &Campaign, progress: Option<Progress>) -> Result<Diagnosis, S
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::params::Params;
 
     fn candidate(mass_kg: f64, frequency_hz: f64) -> Candidate {
-        Candidate {
-            effect: Effect::Foundation,
-            parameters: [
-                ("mass_kg".to_string(), mass_kg),
-                ("frequency_hz".to_string(), frequency_hz),
-                ("damping_ratio".to_string(), 0.05),
-            ]
-            .into_iter()
-            .collect(),
-            heldout_residual: 1.0,
-            score: 1.0,
-            fit_residual: 1.0,
-            params: Params::default(),
-            heldout_rows: Vec::new(),
-            score_rows: Vec::new(),
-        }
+        let mut c = Candidate::empty(Effect::Foundation);
+        c.parameters = [
+            ("mass_kg".to_string(), mass_kg),
+            ("frequency_hz".to_string(), frequency_hz),
+            ("damping_ratio".to_string(), 0.05),
+        ]
+        .into_iter()
+        .collect();
+        c
     }
 
     /// Issue 14 item 7: a 100 000 t foundation under a 41 t table is not a cause.

@@ -1,6 +1,7 @@
 //! What diagnosis returns: the fitted candidates and the whole diagnosis.
 
 use super::effect::Effect;
+use super::evidence::EVIDENCE_SIGMAS;
 use super::residuals::{NoiseFloor, CHANNELS, SCORE_WINDOW};
 use super::{EXPLAINED_RATIO, MISS_RATIO, REQUIRED_GAIN};
 use crate::identify::Identification;
@@ -8,26 +9,99 @@ use crate::params::{ActuatorModel, Params, ServovalveModel};
 use serde::Serialize;
 use std::collections::BTreeMap;
 
+/// A model's figures per test and channel over one part of the tests (the order of the
+/// campaign): NaN where the channel is absent, infinite where the run diverged.
+#[derive(Debug, Clone, Default)]
+pub struct PartRows {
+    /// The predictive score ([`super::residuals::CellScores::score`]).
+    pub score: Vec<[f64; 5]>,
+    /// The standardised residual ([`super::residuals::CellScores::residual`]).
+    pub residual: Vec<[f64; 5]>,
+}
+
 /// A fitted candidate effect.
 #[derive(Debug, Clone, Serialize)]
 pub struct Candidate {
     pub effect: Effect,
     pub parameters: BTreeMap<String, f64>,
+    /// One-sigma uncertainty of each parameter from the fit's covariance; absent where the
+    /// fit gives none (the stick-slip fit is not a least-squares one).
+    pub sigma: BTreeMap<String, f64>,
     /// RMS standardised residual (in units of the spread the model predicts) on the
-    /// held-out cells the baseline misses.
-    pub heldout_residual: f64,
+    /// selection quarter's cells the model it extends misses.
+    pub select_residual: f64,
     /// RMS predictive score on the same cells times a penalty of 1 % per parameter
     /// (lower is better): the ranking.
     pub score: f64,
+    /// RMS standardised residual on the report quarter's cells the baseline misses (shown,
+    /// never used for a decision).
+    pub report_residual: f64,
     pub fit_residual: f64,
+    /// Why the candidate is not evidence of its effect, if it is not ([`super::evidence`]).
+    pub not_evidence: Option<String>,
     #[serde(skip)]
     pub params: Params,
-    /// Held-out standardised residuals per test and channel.
     #[serde(skip)]
-    pub heldout_rows: Vec<[f64; 5]>,
-    /// Held-out predictive scores per test and channel.
+    pub select: PartRows,
     #[serde(skip)]
-    pub score_rows: Vec<[f64; 5]>,
+    pub report: PartRows,
+}
+
+impl Candidate {
+    /// A candidate of `effect` with no parameters and no figures yet (NaN).
+    pub fn empty(effect: Effect) -> Candidate {
+        Candidate {
+            effect,
+            parameters: BTreeMap::new(),
+            sigma: BTreeMap::new(),
+            select_residual: f64::NAN,
+            score: f64::NAN,
+            report_residual: f64::NAN,
+            fit_residual: f64::NAN,
+            not_evidence: None,
+            params: Params::default(),
+            select: PartRows::default(),
+            report: PartRows::default(),
+        }
+    }
+}
+
+/// An accepted cause: an effect, its parameters, and what it gained on the report quarter.
+#[derive(Debug, Clone, Serialize)]
+pub struct Cause {
+    pub effect: Effect,
+    pub parameters: BTreeMap<String, f64>,
+    pub sigma: BTreeMap<String, f64>,
+    /// RMS report-quarter residual on the baseline's missed cells of the model before this
+    /// cause over that of the model with it.
+    pub gain: f64,
+}
+
+/// A candidate that helped on the selection quarter but is not evidence (significance,
+/// bounds, physics): at most a partial explanation.
+#[derive(Debug, Clone, Serialize)]
+pub struct Partial {
+    pub effect: Effect,
+    pub parameters: BTreeMap<String, f64>,
+    /// Selection-quarter score of the model before it over the model with it.
+    pub selection_gain: f64,
+    pub why_not_a_cause: String,
+}
+
+/// One report-quarter cell the final model still misses, located in frequency.
+#[derive(Debug, Clone, Serialize)]
+pub struct UnexplainedCell {
+    pub test: String,
+    pub channel: String,
+    /// The octave band where the cell's residual is largest.
+    pub band_hz: [f64; 2],
+    /// The cell's standardised residual (all bands).
+    pub residual: f64,
+    /// The band's standardised residual.
+    pub band_residual: f64,
+    /// What the residual depends on, where measurable: RMS residual (noise units) while
+    /// the table moves up against down, at large against small displacement.
+    pub depends_on: super::locate::Dependence,
 }
 
 /// The whole diagnosis.
@@ -36,22 +110,36 @@ pub struct Diagnosis {
     pub identification: Identification,
     pub baseline: Params,
     pub noise: NoiseFloor,
-    /// Per test (campaign order) and channel.
+    /// Per test (campaign order) and channel, over the whole test.
     pub baseline_rows: Vec<(String, [f64; 5])>,
+    /// The baseline on the selection and report quarters.
+    pub baseline_select: PartRows,
+    pub baseline_report: PartRows,
+    /// RMS report residual of the baseline on its missed report cells.
     pub baseline_heldout: f64,
-    /// Standardised held-out residual of the baseline per held-out test and channel.
-    pub baseline_heldout_rows: Vec<[f64; 5]>,
-    /// RMS predictive score of the baseline on the missed cells.
+    /// RMS selection score of the baseline on its missed selection cells.
     pub baseline_score: f64,
+    /// The first search's candidates (every catalogue effect on the baseline).
     pub candidates: Vec<Candidate>,
-    pub cause: Option<Effect>,
+    /// Accepted causes in order of acceptance.
+    pub causes: Vec<Cause>,
+    /// Candidates that helped but are not evidence.
+    pub partial: Vec<Partial>,
+    /// Effects the recorded channels cannot show, with why (never reported as absent).
+    pub not_testable: Vec<String>,
     /// Why the best candidate was not taken as the cause though it scored (unphysical).
     pub cause_rejected: Option<String>,
+    /// No report cell the baseline missed is still missed ([`super::EXPLAINED_RATIO`]).
     pub explained: bool,
+    /// Report residual of the baseline over the extended model's, on the baseline's
+    /// missed report cells.
     pub gain: f64,
+    /// The report residual of the extended model on the same cells.
+    pub extended_heldout: f64,
     pub extended: Params,
-    pub fit_tests: Vec<String>,
-    pub heldout_tests: Vec<String>,
+    /// Where the residual lies when not explained, worst first.
+    pub unexplained: Vec<UnexplainedCell>,
+    pub tests: Vec<String>,
     pub valve_model: ServovalveModel,
     pub actuator_model: ActuatorModel,
     /// Output-error cost of the refined baseline with the ideal and nonlinear actuator.
@@ -74,48 +162,85 @@ impl Diagnosis {
         })
     }
 
-    /// The JSON of issue 6 (fixed keys).
+    /// The first cause (the JSON's `cause`, for readers of one cause).
+    pub fn cause(&self) -> Option<Effect> {
+        self.causes.first().map(|c| c.effect)
+    }
+
+    /// The JSON of issue 6 (fixed keys), with issue 17's `causes`, `partial` and
+    /// `unexplained`.
     pub fn to_json(&self) -> serde_json::Value {
         use serde_json::json;
-        let cause = self.cause.map(|e| e.name()).unwrap_or("none");
-        let parameters = match self
-            .cause
-            .and_then(|e| self.candidates.iter().find(|c| c.effect == e))
-        {
+        let cause = self.cause().map(|e| e.name()).unwrap_or("none");
+        let parameters = match self.causes.first() {
             Some(c) => json!(c.parameters),
             None => json!({}),
         };
-        let mut base = serde_json::Map::new();
-        for (name, r) in &self.baseline_rows {
-            let mut m = serde_json::Map::new();
-            for (ch, v) in CHANNELS.iter().zip(r) {
-                if v.is_finite() {
-                    m.insert(ch.to_string(), json!(v));
-                }
-            }
-            base.insert(name.clone(), serde_json::Value::Object(m));
-        }
+        let cells = |r: &[f64; 5]| -> serde_json::Value {
+            serde_json::Value::Object(
+                CHANNELS
+                    .iter()
+                    .zip(r)
+                    .filter(|(_, v)| v.is_finite())
+                    .map(|(ch, v)| (ch.to_string(), json!(v)))
+                    .collect(),
+            )
+        };
+        let per_test = |rows: &[[f64; 5]]| -> serde_json::Map<String, serde_json::Value> {
+            self.tests
+                .iter()
+                .zip(rows)
+                .map(|(t, r)| (t.clone(), cells(r)))
+                .collect()
+        };
+        let base: serde_json::Map<String, serde_json::Value> = self
+            .baseline_rows
+            .iter()
+            .map(|(name, r)| (name.clone(), cells(r)))
+            .collect();
         json!({
             "cause": cause,
             "cause_rejected": self.cause_rejected,
             "parameters": parameters,
+            "causes": self.causes.iter().map(|c| json!({
+                "effect": c.effect.name(),
+                "parameters": c.parameters,
+                "sigma": c.sigma,
+                "gain": c.gain,
+            })).collect::<Vec<_>>(),
+            "partial": self.partial.iter().map(|c| json!({
+                "effect": c.effect.name(),
+                "parameters": c.parameters,
+                "selection_gain": c.selection_gain,
+                "why_not_a_cause": c.why_not_a_cause,
+            })).collect::<Vec<_>>(),
+            "not_testable": self.not_testable,
             "gain": self.gain,
             "explained": self.explained,
+            "unexplained": self.unexplained,
             "baseline_residuals": base,
             "baseline_heldout_residual": self.baseline_heldout,
+            "extended_heldout_residual": self.extended_heldout,
             "baseline_heldout_score": self.baseline_score,
-            "baseline_heldout_residuals": self.heldout_tests.iter().zip(&self.baseline_heldout_rows).map(|(t, r)| {
-                (t.clone(), serde_json::Value::Object(CHANNELS.iter().zip(r).filter(|(_, v)| v.is_finite()).map(|(ch, v)| (ch.to_string(), json!(v))).collect()))
-            }).collect::<serde_json::Map<_, _>>(),
+            "baseline_heldout_residuals": per_test(&self.baseline_report.residual),
+            "baseline_selection_residuals": per_test(&self.baseline_select.residual),
             "candidates": self.candidates.iter().map(|c| json!({
                 "effect": c.effect.name(),
                 "parameters": c.parameters,
-                "heldout_residual": c.heldout_residual,
+                "sigma": c.sigma,
+                "selection_residual": c.select_residual,
+                "heldout_residual": c.report_residual,
                 "score": c.score,
+                "not_evidence": c.not_evidence,
             })).collect::<Vec<_>>(),
             "noise": self.noise,
-            "fit_tests": self.fit_tests,
-            "heldout_tests": self.heldout_tests,
+            "fit_tests": self.tests,
+            "heldout_tests": self.tests,
+            "split": {
+                "fit": "first half of every test: every least-squares fit",
+                "select": "third quarter of every test: missed cells, ranking, polishing, actuator variant, acceptance, whether to search again",
+                "report": "last quarter of every test: gain, explained and unexplained only",
+            },
             "baseline_structure": {
                 "servovalve": self.valve_model.name(),
                 "actuator": self.actuator_model.name(),
@@ -124,7 +249,7 @@ impl Diagnosis {
                 "servovalve": self.extended.servovalve.model.name(),
                 "actuator": self.extended.actuator.model.name(),
             },
-            "rule": format!("held-out = second half of every test; every model is simulated noise-free and with seeded sensor noise at the estimated levels inside the loop; residual (measured - noise-free run) and predicted spread (noisy run with its own sensor noise - noise-free run) are split into octave bands (the lowest from 0 Hz, the highest to Nyquist) and scored per band in windows of {SCORE_WINDOW} samples or more (8 degrees of freedom in the band): score = sqrt(mean over bands of mean(P_meas/P_pred + ln(P_pred/floor^2 share))) (Gaussian log score, a proper scoring rule), residual = sqrt(mean over bands of mean(P_meas/P_pred)) (1 for a model that predicts the data to within its noise); missed cells = held-out (test, channel) cells whose baseline residual exceeds {MISS_RATIO}; cause = the candidate with the lowest RMS score on the missed cells (1 % penalty per parameter) when it divides the baseline's score by >= {REQUIRED_GAIN}; none when no cell is missed; gain = baseline residual / extended residual on the missed cells; explained when the extended residual <= {EXPLAINED_RATIO}"),
+            "rule": format!("every model is simulated noise-free and with seeded sensor noise at the estimated levels inside the loop; residual (measured - noise-free run) and predicted spread (noisy run with its own sensor noise - noise-free run) are split into octave bands (the lowest from 0 Hz, the highest to Nyquist) and scored per band in windows of {SCORE_WINDOW} samples or more (8 degrees of freedom in the band): score = sqrt(mean over bands of mean(P_meas/P_pred + ln(P_pred/floor^2 share))) (Gaussian log score, a proper scoring rule), residual = sqrt(mean over bands of mean(P_meas/P_pred)) (1 for a model that predicts the data to within its noise); missed cells = (test, channel) cells whose residual exceeds {MISS_RATIO}; each search fits every effect not yet accepted on the current model (fit half) and ranks them by RMS score on the cells the current model misses in the selection quarter (1 % penalty per parameter); the best is a cause when it divides the current score there by >= {REQUIRED_GAIN}, is physical and is evidence (no parameter at a bound of its range, its strength parameter more than {EVIDENCE_SIGMAS} sigma from its no-effect value); the search repeats with the causes in the model until no candidate passes or no selection cell is missed; gain = baseline residual / extended residual on the baseline's missed cells of the report quarter; explained when every such cell has an extended residual <= {EXPLAINED_RATIO}"),
         })
     }
 }

@@ -1,11 +1,13 @@
 //! The diagnosis from an identified baseline (steps 1-5 of the module doc), as a
 //! [`Diagnoser`] holding what every step shares: the campaign, its noise, the whitening
-//! of the fitting halves and the tests on each side of the split.
+//! of the fitting halves, the table the bounds scale to, and the report quarter's missed
+//! cells; then searches for causes, one effect at a time, until none passes.
 
 use super::baseline::{refine_output_error, BASELINE_ITERATIONS};
-use super::candidates::{fit_candidate, heldout_scores, scored_candidate, POLISH_ROUNDS};
+use super::candidates::{fit_candidate, heldout_scores, scored_candidate, Fitted, POLISH_ROUNDS};
 use super::effect::{Effect, EFFECTS};
-use super::output::{Candidate, Diagnosis};
+use super::locate::unexplained_cells;
+use super::output::{Candidate, Cause, Diagnosis, PartRows, Partial};
 use super::part::Part;
 use super::residuals::{estimate_noise, ratios, simulate_test, NoiseFloor, Whitening};
 use super::{trace_enabled, unphysical, Progress, EXPLAINED_RATIO, MISS_RATIO, REQUIRED_GAIN};
@@ -16,9 +18,16 @@ use crate::identify::Identification;
 use crate::params::{ActuatorModel, Params};
 use rayon::prelude::*;
 
-/// Steps of the progress bar: identification, refinement, the five candidates, the
-/// best candidate's polish, done.
-const PROGRESS_STEPS: usize = 9;
+/// Steps of the progress bar before the first search: identification, refinement.
+const PROGRESS_SETUP: usize = 2;
+
+/// Steps of one search: every catalogue effect's fit, then the best one's polish.
+const SEARCH_STEPS: usize = EFFECTS.len() + 1;
+
+/// Causes accepted at most: each further search fits every remaining effect again (about
+/// a minute on 2 cores for the paper campaign), and three effects at once are beyond
+/// what the paper's test program separates.
+pub const MAX_CAUSES: usize = 3;
 
 /// Output-error iterations of one polish of the best candidate.
 const POLISH_ITERATIONS: usize = 6;
@@ -37,7 +46,7 @@ const CANDIDATE_LSQ: LsqOptions = LsqOptions {
     parallel: false,
 };
 
-/// The held-out cells the baseline misses ([`MISS_RATIO`]); candidates are scored on
+/// The cells a model misses ([`MISS_RATIO`]) on one quarter; candidates are scored on
 /// them, so an effect that lives in a few tests is not diluted by the many it does not
 /// touch.
 struct Missed {
@@ -46,8 +55,8 @@ struct Missed {
 }
 
 impl Missed {
-    fn of(baseline_heldout_rows: &[[f64; 5]]) -> Missed {
-        let cells: Vec<[bool; 5]> = baseline_heldout_rows
+    fn of(residual_rows: &[[f64; 5]]) -> Missed {
+        let cells: Vec<[bool; 5]> = residual_rows
             .iter()
             .map(|r| r.map(|x| !x.is_nan() && x > MISS_RATIO))
             .collect();
@@ -71,11 +80,22 @@ impl Missed {
             .collect();
         (v.iter().map(|x| x * x).sum::<f64>() / v.len().max(1) as f64).sqrt()
     }
+
+    /// Whether every missed cell is explained by a model whose rows are `rows`: its
+    /// residual there is within [`EXPLAINED_RATIO`] (the rule of `explained`, judged cell
+    /// by cell so that the many cells one effect fixes cannot dilute the few another
+    /// leaves).
+    fn all_explained_by(&self, rows: &[[f64; 5]]) -> bool {
+        rows.iter()
+            .zip(&self.cells)
+            .all(|(r, m)| r.iter().zip(m).all(|(x, &m)| !m || *x <= EXPLAINED_RATIO))
+    }
 }
 
-/// A candidate explains the data when its held-out residual is within [`EXPLAINED_RATIO`].
+/// A candidate explains the selection quarter when its residual there is within
+/// [`EXPLAINED_RATIO`] (polishing stops there).
 fn explains(c: &Candidate) -> bool {
-    c.heldout_residual <= EXPLAINED_RATIO
+    c.select_residual <= EXPLAINED_RATIO
 }
 
 /// What every step of one diagnosis shares.
@@ -83,16 +103,32 @@ struct Diagnoser<'a> {
     c: &'a Campaign,
     noise: NoiseFloor,
     whitening: Whitening,
-    /// Every test: fitted on its first half, scored on its second.
-    fit_idx: Vec<usize>,
-    heldout_idx: Vec<usize>,
+    /// Every test: fitted on its first half, selected on its third quarter, reported on
+    /// its last ([`Part`]).
+    tests: Vec<usize>,
+    /// The table the effects' fitting bounds are scaled to (the identified baseline).
+    table: Params,
+    /// The report quarter's cells the baseline misses (gain and `explained` only).
+    report_missed: Missed,
+    /// The catalogue effects the recorded channels can show.
+    testable: Vec<Effect>,
     progress: Option<Progress<'a>>,
 }
 
+/// The model a search extends: its parameters, its rows on the two quarters, and the
+/// section-4 estimates with the same causes (the less bent base of the candidates).
+#[derive(Clone)]
+struct Current {
+    params: Params,
+    section4: Params,
+    select: PartRows,
+    report: PartRows,
+}
+
 impl Diagnoser<'_> {
-    fn tick(&self, i: usize, what: &str) {
+    fn tick(&self, i: usize, total: usize, what: &str) {
         if let Some(p) = self.progress {
-            p(i, PROGRESS_STEPS, what);
+            p(i, total, what);
         }
     }
 
@@ -102,19 +138,20 @@ impl Diagnoser<'_> {
             self.c,
             p0,
             None,
-            &self.fit_idx,
+            &self.table,
+            &self.tests,
             &self.whitening,
             BASELINE_ITERATIONS,
         );
         match refined {
-            Some((cost, p, n)) => {
+            Some(r) => {
                 if trace_enabled() {
                     eprintln!(
-                        "  refinement ({:?}): {n} iterations, cost {cost:.4}",
-                        p0.actuator.model
+                        "  refinement ({:?}): {} iterations, cost {:.4}",
+                        p0.actuator.model, r.iterations, r.cost
                     );
                 }
-                (cost, p)
+                (r.cost, r.params)
             }
             None => (f64::INFINITY, *p0),
         }
@@ -160,30 +197,38 @@ impl Diagnoser<'_> {
             .collect()
     }
 
-    /// Step 3: every catalogue effect fitted from both bases, summarised on the missed
-    /// cells.
-    fn fit_candidates(&self, bases: [Params; 2], missed: &Missed) -> Vec<Candidate> {
-        let done = std::sync::atomic::AtomicUsize::new(2);
-        let mut candidates: Vec<Candidate> = EFFECTS
+    /// Every effect of `effects` fitted on the two bases, summarised on the cells
+    /// `missed` of the selection quarter. `step0` is the progress step of the search.
+    fn fit_candidates(
+        &self,
+        effects: &[Effect],
+        bases: [Params; 2],
+        missed: &Missed,
+        (step0, total): (usize, usize),
+    ) -> Vec<Candidate> {
+        let done = std::sync::atomic::AtomicUsize::new(step0);
+        let mut candidates: Vec<Candidate> = effects
             .par_iter()
             .filter_map(|&e| {
                 let cand = fit_candidate(
                     e,
                     self.c,
                     &bases,
-                    &self.fit_idx,
-                    &self.heldout_idx,
+                    &self.tests,
+                    &self.tests,
                     &self.noise,
                     CANDIDATE_LSQ,
                     &self.whitening,
                 );
                 let n = done.fetch_add(1, std::sync::atomic::Ordering::Relaxed);
-                self.tick(n + 1, e.name());
+                self.tick(n + 1, total, &format!("fitted {}", e.name()));
                 cand
             })
             .collect();
         for cand in &mut candidates {
-            cand.summarise(&|rows| missed.rms(rows));
+            cand.summarise(&|rows| missed.rms(rows), &|rows| {
+                self.report_missed.rms(rows)
+            });
         }
         candidates
     }
@@ -200,34 +245,57 @@ impl Diagnoser<'_> {
         let mut p0 = from.params;
         p0.actuator.model = model;
         let effect: (Effect, &[f64]) = (from.effect, &theta);
-        let (cost, p, _) = refine_output_error(
+        let r = refine_output_error(
             self.c,
             &p0,
             Some(effect),
-            &self.fit_idx,
+            &self.table,
+            &self.tests,
             &self.whitening,
             POLISH_ITERATIONS,
         )?;
-        let theta = from.effect.read(&p);
+        let theta = from.effect.read(&r.params);
+        // the stick-slip polish holds the effect: its uncertainty is the fit's own
+        let sigma: Vec<f64> = if r.effect_sigma.is_empty() {
+            from.effect
+                .parameters()
+                .iter()
+                .map(|k| from.sigma.get(*k).copied().unwrap_or(f64::NAN))
+                .collect()
+        } else {
+            r.effect_sigma.clone()
+        };
+        let bounds = if r.effect_bounds.0.is_empty() {
+            from.effect.bounds(&self.table)
+        } else {
+            r.effect_bounds.clone()
+        };
         let mut polished = scored_candidate(
             from.effect,
             self.c,
-            &theta,
-            cost.sqrt(),
-            p,
-            &self.heldout_idx,
+            Fitted {
+                theta: &theta,
+                sigma: &sigma,
+                bounds: &bounds,
+                fit_residual: r.cost.sqrt(),
+                params: r.params,
+            },
+            &self.tests,
             &self.noise,
         );
-        polished.summarise(&|rows| missed.rms(rows));
+        polished.summarise(&|rows| missed.rms(rows), &|rows| {
+            self.report_missed.rms(rows)
+        });
         Some(polished)
     }
 
-    /// Step 4: the best candidate polished: its own fit only freed what interacts with
-    /// the effect, and the rest may still hold the baseline's bends. The baseline's
-    /// variant first; while that leaves the data unexplained the other variant too (a
-    /// missing effect can tip the baseline's choice: a deadband on the ideal actuator
+    /// The best candidate polished: its own fit only freed what interacts with the
+    /// effect, and the rest may still hold the baseline's bends. The baseline's variant
+    /// first; while that leaves the selection quarter unexplained the other variant too
+    /// (a missing effect can tip the baseline's choice: a deadband on the ideal actuator
     /// fits better as a nonlinear one), then further rounds while unexplained and
-    /// improving (a heavily saturated table bends the baseline by tens of percent).
+    /// improving (a heavily saturated table bends the baseline by tens of percent). Every
+    /// decision here reads the selection quarter only.
     fn polish_best(&self, cand: &Candidate, missed: &Missed) -> Candidate {
         let better = |a: Option<Candidate>, b: &Candidate| a.filter(|a| a.score < b.score);
         let own = cand.params.actuator.model;
@@ -257,6 +325,78 @@ impl Diagnoser<'_> {
         }
         best
     }
+
+    /// One search on top of `current` with the effects not yet accepted: every candidate
+    /// fitted, the best polished. Returns the candidates (the best one polished) and the
+    /// index of the best, `None` when no cell is missed or no candidate could be fitted.
+    fn search(
+        &self,
+        current: &Current,
+        accepted: &[Effect],
+        round: usize,
+    ) -> Option<(Vec<Candidate>, usize, Missed)> {
+        let missed = Missed::of(&current.select.residual);
+        if !missed.any {
+            return None;
+        }
+        let effects: Vec<Effect> = self
+            .testable
+            .iter()
+            .copied()
+            .filter(|e| !accepted.contains(e))
+            .collect();
+        let step0 = PROGRESS_SETUP + round * SEARCH_STEPS;
+        let total = step0 + SEARCH_STEPS;
+        self.tick(
+            step0,
+            total,
+            &format!("search {}: fitting every effect", round + 1),
+        );
+        let mut candidates = self.fit_candidates(
+            &effects,
+            [current.params, current.section4],
+            &missed,
+            (step0, total),
+        );
+        let k = (0..candidates.len())
+            .min_by(|&a, &b| candidates[a].score.total_cmp(&candidates[b].score))?;
+        self.tick(
+            total - 1,
+            total,
+            &format!(
+                "search {}: refining {}",
+                round + 1,
+                candidates[k].effect.name()
+            ),
+        );
+        candidates[k] = self.polish_best(&candidates[k], &missed);
+        Some((candidates, k, missed))
+    }
+}
+
+/// What one search concluded about its best candidate.
+enum Verdict {
+    Cause,
+    /// It helps on the selection quarter but is not evidence (or not physical).
+    Partial(String),
+    /// It does not help enough to count.
+    NoGain,
+}
+
+/// The verdict on `best` against the model it extends, scored `current_score` on the
+/// selection quarter's missed cells: a cause when it divides that score by at least
+/// [`REQUIRED_GAIN`] (on data no fit has seen), is physical and is evidence.
+fn verdict(best: &Candidate, current_score: f64, table_mass_kg: f64) -> Verdict {
+    if !(current_score / best.score >= REQUIRED_GAIN) {
+        return Verdict::NoGain;
+    }
+    if let Some(why) = unphysical(best, table_mass_kg) {
+        return Verdict::Partial(why);
+    }
+    match &best.not_evidence {
+        Some(why) => Verdict::Partial(why.clone()),
+        None => Verdict::Cause,
+    }
 }
 
 /// Diagnose the screened campaign `c` from its baseline identification `id`.
@@ -266,7 +406,7 @@ pub(super) fn diagnose_with(
     progress: Option<Progress>,
 ) -> Diagnosis {
     if let Some(p) = progress {
-        p(0, PROGRESS_STEPS, "identifying the baseline");
+        p(0, PROGRESS_SETUP + SEARCH_STEPS, "identifying the baseline");
     }
     let noise = estimate_noise(c);
     let mut base = id.params;
@@ -278,69 +418,131 @@ pub(super) fn diagnose_with(
         base.servovalve = v;
     }
     let spool_valve = base.servovalve;
-    let fit_idx: Vec<usize> = (0..c.info.tests.len()).collect();
-    let whitening = Whitening::new(&base, c, &fit_idx, &noise, Part::Fit);
-    let d = Diagnoser {
+    let tests: Vec<usize> = (0..c.info.tests.len()).collect();
+    let (testable, not_testable): (Vec<_>, Vec<_>) = EFFECTS
+        .into_iter()
+        .map(|e| (e, e.testable(c)))
+        .partition(|(_, t)| t.is_ok());
+    let whitening = Whitening::new(&base, c, &tests, &noise, Part::Fit);
+    let mut d = Diagnoser {
         c,
         noise,
         whitening,
-        heldout_idx: fit_idx.clone(),
-        fit_idx,
+        table: base,
+        tests,
+        report_missed: Missed {
+            cells: Vec::new(),
+            any: false,
+        },
+        testable: testable.into_iter().map(|(e, _)| e).collect(),
         progress,
     };
-    d.tick(1, "refining the baseline by output error");
+    d.tick(
+        1,
+        PROGRESS_SETUP + SEARCH_STEPS,
+        "refining the baseline by output error",
+    );
     let (base, actuator_costs) = d.refine_both_variants(base);
+    d.table = base;
     let baseline_rows = d.baseline_rows(&base);
-    let (baseline_score_rows, baseline_heldout_rows) =
-        heldout_scores(&base, c, &d.heldout_idx, &d.noise, false);
-    let missed = Missed::of(&baseline_heldout_rows);
-    let baseline_heldout = missed.rms(&baseline_heldout_rows);
-    let baseline_score = missed.rms(&baseline_score_rows);
+    let (baseline_select, baseline_report) = heldout_scores(&base, c, &d.tests, &d.noise, false);
+    d.report_missed = Missed::of(&baseline_report.residual);
+    let baseline_heldout = d.report_missed.rms(&baseline_report.residual);
+    let baseline_score = Missed::of(&baseline_select.residual).rms(&baseline_select.score);
     // candidates start from the section-4 estimates too (the output-error baseline has
     // bent its parameters to absorb the missing effect) with the chosen actuator and the
     // valve fitted on the spool (the refinement may have bent its dynamics too)
-    let mut candidate_base = id.params;
-    candidate_base.actuator.model = base.actuator.model;
-    candidate_base.servovalve = spool_valve;
-    let mut candidates = d.fit_candidates([base, candidate_base], &missed);
-    let best_index =
-        (0..candidates.len()).min_by(|&a, &b| candidates[a].score.total_cmp(&candidates[b].score));
-    if let Some(k) = best_index.filter(|_| missed.any) {
-        d.tick(8, "refining the best candidate");
-        candidates[k] = d.polish_best(&candidates[k], &missed);
-    }
-    // step 5: the cause, when it divides the baseline's score by REQUIRED_GAIN and is
-    // physical
-    let best = candidates
-        .iter()
-        .min_by(|a, b| a.score.total_cmp(&b.score))
-        .cloned();
-    let rejected = best
-        .as_ref()
-        .and_then(|b| unphysical(b, base.table.mass_kg));
-    let (cause, extended, ext_resid) = match &best {
-        Some(b)
-            if missed.any && baseline_score / b.score >= REQUIRED_GAIN && rejected.is_none() =>
-        {
-            (Some(b.effect), b.params, b.heldout_residual)
-        }
-        _ => (None, base, baseline_heldout),
+    let mut section4 = id.params;
+    section4.actuator.model = base.actuator.model;
+    section4.servovalve = spool_valve;
+    let mut current = Current {
+        params: base,
+        section4,
+        select: baseline_select.clone(),
+        report: baseline_report.clone(),
     };
-    let names = |idx: &[usize]| idx.iter().map(|&i| c.info.tests[i].name.clone()).collect();
+    let (mut causes, mut partial) = (Vec::new(), Vec::new());
+    let mut first_candidates = Vec::new();
+    let mut cause_rejected = None;
+    for round in 0..MAX_CAUSES {
+        let accepted: Vec<Effect> = causes.iter().map(|k: &Cause| k.effect).collect();
+        let Some((candidates, k, missed)) = d.search(&current, &accepted, round) else {
+            break;
+        };
+        let best = candidates[k].clone();
+        if round == 0 {
+            first_candidates = candidates;
+        }
+        let current_score = missed.rms(&current.select.score);
+        match verdict(&best, current_score, base.table.mass_kg) {
+            Verdict::Cause => {
+                let before = d.report_missed.rms(&current.report.residual);
+                causes.push(Cause {
+                    effect: best.effect,
+                    parameters: best.parameters.clone(),
+                    sigma: best.sigma.clone(),
+                    gain: before / best.report_residual,
+                });
+                let mut section4 = current.section4;
+                best.effect
+                    .apply(&mut section4, &best.effect.read(&best.params));
+                current = Current {
+                    params: best.params,
+                    section4,
+                    select: best.select,
+                    report: best.report,
+                };
+            }
+            Verdict::Partial(why) => {
+                if round == 0 && unphysical(&best, base.table.mass_kg).is_some() {
+                    cause_rejected = Some(why.clone());
+                }
+                partial.push(Partial {
+                    effect: best.effect,
+                    parameters: best.parameters.clone(),
+                    selection_gain: current_score / best.score,
+                    why_not_a_cause: why,
+                });
+                break;
+            }
+            Verdict::NoGain => break,
+        }
+    }
+    let extended = current.params;
+    let extended_heldout = d.report_missed.rms(&current.report.residual);
+    let explained = d.report_missed.all_explained_by(&current.report.residual);
+    let unexplained = if explained {
+        Vec::new()
+    } else {
+        unexplained_cells(
+            &extended,
+            c,
+            &current.report,
+            &d.report_missed.cells,
+            &d.noise,
+        )
+    };
     Diagnosis {
         baseline: base,
         baseline_rows,
+        baseline_select,
+        baseline_report,
         baseline_heldout,
-        baseline_heldout_rows,
         baseline_score,
-        candidates,
-        cause,
-        cause_rejected: rejected,
-        explained: ext_resid <= EXPLAINED_RATIO,
-        gain: baseline_heldout / ext_resid,
+        candidates: first_candidates,
+        causes,
+        partial,
+        not_testable: not_testable
+            .into_iter()
+            .filter_map(|(_, t)| t.err())
+            .collect(),
+        cause_rejected,
+        explained,
+        gain: baseline_heldout / extended_heldout,
+        extended_heldout,
         extended,
-        fit_tests: names(&d.fit_idx),
-        heldout_tests: names(&d.heldout_idx),
+        unexplained,
+        tests: c.info.tests.iter().map(|t| t.name.clone()).collect(),
         valve_model: id.params.servovalve.model,
         actuator_model: base.actuator.model,
         actuator_costs,
@@ -384,18 +586,38 @@ mod tests {
 
     #[test]
     fn a_candidate_explains_the_data_up_to_the_explained_ratio() {
-        let mut c = Candidate {
-            effect: Effect::Specimen,
-            parameters: Default::default(),
-            heldout_residual: EXPLAINED_RATIO,
-            score: 1.0,
-            fit_residual: 1.0,
-            params: Params::default(),
-            heldout_rows: Vec::new(),
-            score_rows: Vec::new(),
-        };
+        let mut c = Candidate::empty(Effect::Specimen);
+        c.select_residual = EXPLAINED_RATIO;
         assert!(explains(&c));
-        c.heldout_residual = EXPLAINED_RATIO * 1.001;
+        c.select_residual = EXPLAINED_RATIO * 1.001;
         assert!(!explains(&c));
+    }
+
+    /// `explained` is judged cell by cell: one missed cell left at 2.5 is not explained
+    /// however many others the model fixes (the RMS over them would be below 2).
+    #[test]
+    fn one_cell_still_missed_leaves_the_data_unexplained() {
+        let baseline = [[5.0, 5.0, 5.0, NAN, 1.0], [5.0, 5.0, 5.0, NAN, 4.0]];
+        let m = Missed::of(&baseline);
+        let fixed = [[1.0, 1.0, 1.0, NAN, 9.0], [1.0, 1.0, 1.0, NAN, 1.5]];
+        assert!(m.all_explained_by(&fixed));
+        let one_left = [[1.0, 1.0, 1.0, NAN, 1.0], [1.0, 1.0, 1.0, NAN, 2.5]];
+        assert!(m.rms(&one_left) < EXPLAINED_RATIO);
+        assert!(!m.all_explained_by(&one_left));
+    }
+
+    /// A cause needs the gain on the selection quarter, physics and evidence; a candidate
+    /// with the gain but no evidence is partial.
+    #[test]
+    fn the_verdict_needs_gain_physics_and_evidence() {
+        let mut c = Candidate::empty(Effect::ValveDeadband);
+        c.score = 1.0;
+        assert!(matches!(
+            verdict(&c, REQUIRED_GAIN * 0.99, 4e4),
+            Verdict::NoGain
+        ));
+        assert!(matches!(verdict(&c, REQUIRED_GAIN, 4e4), Verdict::Cause));
+        c.not_evidence = Some("at a bound".into());
+        assert!(matches!(verdict(&c, 10.0, 4e4), Verdict::Partial(_)));
     }
 }

@@ -51,11 +51,12 @@ pub(super) fn fit_stick_slip(
         return Some(best);
     }
     for _ in 0..UNBENDING_ROUNDS {
-        let Some((_, unbent, _)) =
-            refine_output_error(c, &best.2, Some((e, &best.1)), fit_idx, whitening, 4)
+        let Some(unbent) =
+            refine_output_error(c, &best.2, Some((e, &best.1)), base, fit_idx, whitening, 4)
         else {
             break;
         };
+        let unbent = unbent.params;
         let next = polish_stick_slip(
             &eval_on(unbent),
             [best.1[0], best.1[1], unbent.friction.force_n],

@@ -45,4 +45,6 @@ pub const EFFECT: Effect = Effect {
     cross_check: None,
     help: "",
     signature_tests: &["S6", "S9", "R2"],
+    no_effect: &[("ratio", 1.0)],
+    signature_channels: &[&["displacement"], &["acceleration"]],
 };

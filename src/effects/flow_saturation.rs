@@ -50,4 +50,6 @@ pub const EFFECT: Effect = Effect {
     cross_check: None,
     help: "",
     signature_tests: &["S9", "S6", "R2"],
+    no_effect: &[],
+    signature_channels: &[&["displacement"], &["acceleration"]],
 };

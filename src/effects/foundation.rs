@@ -57,4 +57,6 @@ pub const EFFECT: Effect = Effect {
     // the broadest random test shows a stiff foundation's mode, the largest forces its
     // deflection in the LVDT
     signature_tests: &["R1", "R3", "S9"],
+    no_effect: &[],
+    signature_channels: &[&["force"], &["acceleration", "displacement"]],
 };

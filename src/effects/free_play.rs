@@ -141,4 +141,6 @@ pub const EFFECT: Effect = Effect {
     help: "",
     // the reversals of the triangles and slow sines, where the rod crosses the gap
     signature_tests: &["T1", "T3", "S1", "S4"],
+    no_effect: &[("gap_m", 0.0)],
+    signature_channels: &[&["acceleration", "displacement"]],
 };

@@ -54,4 +54,6 @@ pub const EFFECT: Effect = Effect {
     cross_check: None,
     help: "",
     signature_tests: &["T1", "T3", "S1", "S4"],
+    no_effect: &[("ratio", 1.0)],
+    signature_channels: &[&["force"], &["acceleration"]],
 };

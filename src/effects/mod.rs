@@ -92,6 +92,17 @@ pub struct Effect {
     /// today (`src/diagnose/mod.rs`, `Effect::signature_tests`); to be replaced by test
     /// kinds when the diagnosis picks tests by what they excite.
     pub signature_tests: &'static [&'static str],
+    /// The parameters whose value makes the effect vanish, with that value (a specimen of
+    /// no mass, a static ratio of 1): a fitted cause is evidence only when its uncertainty
+    /// excludes them (issue 17 part 3). Empty when the effect vanishes only at a limit
+    /// (a foundation infinitely stiff, a flow limit above any demand): then the rule that
+    /// no parameter sits at a bound of its fitting range guards it.
+    pub no_effect: &'static [(&'static str, f64)],
+    /// The recorded channels its signature needs, as alternatives: the effect can be
+    /// tested when every channel of at least one alternative is recorded (names of
+    /// `crate::diagnose::CHANNELS`); otherwise the diagnosis reports it as not testable,
+    /// never as absent (issue 16 part 5).
+    pub signature_channels: &'static [&'static [&'static str]],
 }
 
 /// A rule across parameters that `p` breaks: the key to name, its value, the rule in words.
@@ -245,15 +256,45 @@ impl Effect {
         }
     }
 
-    /// Fitting bounds of the diagnosis, one per parameter in declaration order.
-    ///
-    /// Today these are the fixed ranges of `src/diagnose/mod.rs` (`Effect::bounds`), set
-    /// for the 41-t TREES Lab table and copied as they are so the diagnosis stays
-    /// byte-identical; `table` is taken so that a later issue can scale them to the
-    /// table's mass, flow gain and stroke.
+    /// Fitting bounds of the diagnosis, one per parameter in declaration order: the
+    /// declared ranges (set for the 41-t TREES Lab table) scaled to `table` by what
+    /// the parameter's unit measures: masses by the table's mass, flows by its flow gain,
+    /// stiffnesses by its oil column's. A 6-t table's specimen range then ends at 30 t,
+    /// not at 200 t, and a wrong effect cannot wander to masses no such table carries
+    /// (issue 17 part 6). Frequencies, ratios and lengths are the table's own physics
+    /// and keep their ranges.
     pub fn fit_bounds(&self, table: &Params) -> Vec<FitRange> {
-        let _ = table;
-        self.parameters.iter().map(|q| q.fit_range).collect()
+        let reference = Params::trees_lab();
+        let ratio = |now: f64, then: f64| {
+            let r = now / then;
+            if r.is_finite() && r > 0.0 {
+                r
+            } else {
+                1.0
+            }
+        };
+        let scale = |unit: Option<&str>| match unit {
+            Some("kg") => ratio(table.table.mass_kg, reference.table.mass_kg),
+            Some("m3/s") => ratio(
+                table.actuator.flow_gain_m3_s,
+                reference.actuator.flow_gain_m3_s,
+            ),
+            Some("N/m") => ratio(
+                table.actuator.oil_column_stiffness_n_m(),
+                reference.actuator.oil_column_stiffness_n_m(),
+            ),
+            _ => 1.0,
+        };
+        self.parameters
+            .iter()
+            .map(|q| {
+                let k = scale(q.unit);
+                FitRange {
+                    lower: q.fit_range.lower * k,
+                    upper: q.fit_range.upper * k,
+                }
+            })
+            .collect()
     }
 
     /// Switch the effect on in `p` and set its parameters from `key=value` pairs: the

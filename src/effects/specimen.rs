@@ -252,4 +252,6 @@ pub const EFFECT: Effect = Effect {
     help: "modes 2 and 3: mode2.mass_kg=..,mode2.frequency_hz=..,mode2.damping_ratio=.. \
            (mode3 likewise); a mode exists when its mass_kg > 0, mode 3 needs mode 2",
     signature_tests: &["R2", "R3"],
+    no_effect: &[("mass_kg", 0.0)],
+    signature_channels: &[&["force"], &["acceleration"]],
 };

@@ -80,4 +80,6 @@ pub const EFFECT: Effect = Effect {
     help: "",
     // the slow sines creep through the Stribeck range twice a cycle
     signature_tests: &["S1", "S2", "S4", "S5", "S7", "S8", "T1", "T3"],
+    no_effect: &[("static_ratio", 1.0)],
+    signature_channels: &[&["force"], &["acceleration"]],
 };

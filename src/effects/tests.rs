@@ -154,6 +154,24 @@ fn fit_bounds_are_the_diagnosis_ranges() {
     }
 }
 
+/// Issue 17 part 6: on a 6-t table the mass ranges shrink with the table, the
+/// frequencies keep theirs, and a flow range follows the valve's flow gain.
+#[test]
+fn fit_bounds_scale_with_the_table() {
+    let big = Params::trees_lab();
+    let mut small = big;
+    small.table.mass_kg = 6_000.0;
+    small.actuator.flow_gain_m3_s *= 0.25;
+    let k = 6_000.0 / big.table.mass_kg;
+    let specimen = by_name("specimen").unwrap();
+    let (a, b) = (specimen.fit_bounds(&big), specimen.fit_bounds(&small));
+    assert!((b[0].upper / a[0].upper - k).abs() < 1e-12);
+    assert_eq!(a[1], b[1]);
+    let flow = by_name("flow_saturation").unwrap();
+    let (a, b) = (flow.fit_bounds(&big), flow.fit_bounds(&small));
+    assert!((b[0].upper / a[0].upper - 0.25).abs() < 1e-12);
+}
+
 #[test]
 fn specimen_modes_reach_the_parameter_file_and_come_back() {
     let mut p = Params::trees_lab();

@@ -59,4 +59,6 @@ pub const EFFECT: Effect = Effect {
     cross_check: None,
     help: "",
     signature_tests: &["R2", "T1", "T3", "S1"],
+    no_effect: &[("deadband", 0.0)],
+    signature_channels: &[&["displacement"], &["acceleration"], &["force"]],
 };

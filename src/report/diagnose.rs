@@ -24,7 +24,15 @@ fn heat(x: f64) -> String {
 pub fn write(dir: &Path, c: &Campaign, d: &Diagnosis) -> Result<(), super::ReportError> {
     super::create_dir(dir)?;
     let j = d.to_json();
-    let cause = j["cause"].as_str().unwrap_or("none").to_string();
+    let cause = if d.causes.is_empty() {
+        "none".to_string()
+    } else {
+        d.causes
+            .iter()
+            .map(|c| c.effect.name())
+            .collect::<Vec<_>>()
+            .join(" + ")
+    };
     let mut figures: Vec<(String, String)> = Vec::new();
     // the worst tests of the baseline: the largest residual ratio
     let mut worst: Vec<(usize, usize, f64)> = d
@@ -161,7 +169,7 @@ pub fn write(dir: &Path, c: &Campaign, d: &Diagnosis) -> Result<(), super::Repor
     let mut md = String::new();
     let _ = write!(
         html,
-        "<h1>Diagnosis of {}</h1><p><b>Cause: {cause}</b>, gain {:.2} on held-out data, explained: {}.</p>\
+        "<h1>Diagnosis of {}</h1><p><b>Cause: {cause}</b>, gain {:.2} on the report quarter (data no fit or decision saw), explained: {}.</p>\
          <p>Baseline: servovalve {}, actuator {} (chosen by output error: cost {:.4e} ideal, {:.4e} nonlinear); \
          noise floor from {}: displacement {:.3e} m, acceleration {:.3e} m/s^2, force {:.1} N, spool {:.3e}, \
          valve command {:.3e}.</p>{}<p>Rule: {}</p>",
@@ -230,8 +238,10 @@ pub fn write(dir: &Path, c: &Campaign, d: &Diagnosis) -> Result<(), super::Repor
         html.push_str("</tr>");
         md.push('\n');
     }
-    html.push_str("</table><h2>Candidates</h2><table><tr><th>effect</th><th>parameters</th><th>held-out residual</th><th>score</th></tr>");
-    md.push_str("\n## Candidates\n\n| effect | parameters | held-out residual | score |\n|---|---|---|---|\n");
+    html.push_str("</table>");
+    super::diagnose_causes::write_causes(&mut html, &mut md, d);
+    html.push_str("<h2>Candidates of the first search</h2><table><tr><th>effect</th><th>parameters</th><th>report residual</th><th>selection score</th></tr>");
+    md.push_str("\n## Candidates of the first search\n\n| effect | parameters | report residual | selection score |\n|---|---|---|---|\n");
     let _ = write!(
         html,
         "<tr><td>baseline</td><td></td><td>{:.3}</td><td>{:.3}</td></tr>",
@@ -248,7 +258,7 @@ pub fn write(dir: &Path, c: &Campaign, d: &Diagnosis) -> Result<(), super::Repor
             "<tr><td>{}</td><td style=\"text-align:left\">{}</td><td>{:.3}</td><td>{:.3}</td></tr>",
             cand.effect.name(),
             ps.join(", "),
-            cand.heldout_residual,
+            cand.report_residual,
             cand.score
         );
         let _ = writeln!(
@@ -256,7 +266,7 @@ pub fn write(dir: &Path, c: &Campaign, d: &Diagnosis) -> Result<(), super::Repor
             "| {} | {} | {:.3} | {:.3} |",
             cand.effect.name(),
             ps.join(", "),
-            cand.heldout_residual,
+            cand.report_residual,
             cand.score
         );
     }

@@ -3,6 +3,7 @@
 
 pub mod closed_loop;
 pub mod diagnose;
+mod diagnose_causes;
 pub mod identify;
 pub mod plot;
 

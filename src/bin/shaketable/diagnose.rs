@@ -12,9 +12,12 @@ pub struct Args {
     /// Write the diagnosis as JSON here.
     #[arg(long)]
     json: Option<PathBuf>,
-    /// Write the extended parameter file (baseline plus the chosen effect) here.
+    /// Write the extended parameter file (baseline plus the causes found) here.
     #[arg(long)]
     params_out: Option<PathBuf>,
+    /// Write the refined baseline (the model the gain is measured against) here.
+    #[arg(long)]
+    baseline_out: Option<PathBuf>,
     /// Write the report (index.html, README.md, figures) into this directory.
     #[arg(long)]
     report: Option<PathBuf>,
@@ -38,9 +41,10 @@ pub fn run(args: Args) -> anyhow::Result<()> {
         args.report.as_deref(),
         args.force,
         inputs,
-    )?;
+    )?
+    .with_baseline_out(args.baseline_out.as_deref())?;
     let bar = (!args.quiet).then(|| {
-        let b = indicatif::ProgressBar::new(9);
+        let b = indicatif::ProgressBar::new(1);
         b.set_style(
             indicatif::ProgressStyle::with_template("{elapsed:>4} [{bar:30}] {pos}/{len} {msg}")
                 .unwrap_or_else(|_| indicatif::ProgressStyle::default_bar()),
@@ -99,15 +103,13 @@ pub fn run(args: Args) -> anyhow::Result<()> {
         println!("  {name:4} {}", cells.join(" "));
     }
     println!(
-        "held out: the second half of every test ({}); baseline residual on the missed cells {:.3}",
-        d.heldout_tests.join(", "),
-        d.baseline_heldout
+        "split: every test fits on its first half, selects on its third quarter, reports on its last"
     );
     println!(
-        "baseline predictive score on the missed cells {:.3}",
-        d.baseline_score
+        "baseline: selection score on its missed cells {:.3}, report residual on its missed cells {:.3}",
+        d.baseline_score, d.baseline_heldout
     );
-    println!("candidates (held-out residual, score, parameters):");
+    println!("first search's candidates (selection residual, score, report residual, parameters):");
     for c in &d.candidates {
         let ps: Vec<String> = c
             .parameters
@@ -115,11 +117,35 @@ pub fn run(args: Args) -> anyhow::Result<()> {
             .map(|(k, v)| format!("{k}={v:.5}"))
             .collect();
         println!(
-            "  {:16} {:8.3} {:8.3}  {}",
+            "  {:16} {:8.3} {:8.3} {:8.3}  {}{}",
             c.effect.name(),
-            c.heldout_residual,
+            c.select_residual,
             c.score,
-            ps.join(", ")
+            c.report_residual,
+            ps.join(", "),
+            c.not_evidence
+                .as_ref()
+                .map(|w| format!("  (not evidence: {w})"))
+                .unwrap_or_default()
+        );
+    }
+    for (k, c) in d.causes.iter().enumerate() {
+        println!(
+            "cause {}: {}  gain {:.2}  parameters {}",
+            k + 1,
+            c.effect.name(),
+            c.gain,
+            serde_json::to_string(&c.parameters)?
+        );
+    }
+    for why in &d.not_testable {
+        println!("{why}");
+    }
+    for p in &d.partial {
+        println!(
+            "partial explanation (not a cause): {}: {}",
+            p.effect.name(),
+            p.why_not_a_cause
         );
     }
     let j = d.to_json();
@@ -130,9 +156,16 @@ pub fn run(args: Args) -> anyhow::Result<()> {
         d.explained,
         j["parameters"]
     );
+    for u in &d.unexplained {
+        println!(
+            "  unexplained: {} {} residual {:.2}, worst in {:.0}-{:.0} Hz ({:.2})",
+            u.test, u.channel, u.residual, u.band_hz[0], u.band_hz[1], u.band_residual
+        );
+    }
     if let Some(note) = d.structure_change() {
         println!("{note}");
     }
+    outputs.write_baseline(&d.baseline.to_toml_string())?;
     outputs.write(
         &(serde_json::to_string_pretty(&j)? + "\n"),
         &d.extended.to_toml_string(),

@@ -13,6 +13,8 @@ pub struct Outputs {
     report: Option<DirPlan>,
     force: bool,
     inputs: Inputs,
+    /// `diagnose --baseline-out`: the refined baseline the gain is measured against.
+    baseline_out: Option<PathBuf>,
 }
 
 /// Every file a campaign run reads: campaign.toml and the records.
@@ -56,7 +58,42 @@ impl Outputs {
             report,
             force,
             inputs,
+            baseline_out: None,
         })
+    }
+
+    /// Add `diagnose --baseline-out FILE`, checked by the same rules (distinct from the
+    /// other files, never over an input, replaced only with `--force`); outside the report
+    /// folder, which is replaced whole.
+    pub fn with_baseline_out(mut self, path: Option<&Path>) -> anyhow::Result<Self> {
+        let Some(path) = path else { return Ok(self) };
+        let others: Vec<&Path> = [&self.json, &self.params_out]
+            .into_iter()
+            .flatten()
+            .map(PathBuf::as_path)
+            .chain(std::iter::once(path))
+            .collect();
+        output::check_distinct(&others)?;
+        if let Some(r) = &self.report {
+            if in_folder(path, r.target()) {
+                anyhow::bail!(
+                    "--baseline-out {}: inside the --report folder, which is replaced whole; write it elsewhere",
+                    path.display()
+                );
+            }
+        }
+        output::check_file(path, self.force, &self.inputs)?;
+        self.baseline_out = Some(path.to_path_buf());
+        Ok(self)
+    }
+
+    /// Write the `--baseline-out` file, when one was asked for.
+    pub fn write_baseline(&self, text: &str) -> anyhow::Result<()> {
+        if let Some(p) = &self.baseline_out {
+            output::write_file(p, text.as_bytes(), self.force, &self.inputs)?;
+            println!("wrote {}", p.display());
+        }
+        Ok(())
     }
 
     /// Write the JSON text (for `--json`), the parameter file (for `--params-out`) and the

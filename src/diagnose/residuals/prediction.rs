@@ -19,11 +19,13 @@ pub fn simulate_test_with(
     noise: Option<&[SensorNoise]>,
 ) -> Vec<Outputs> {
     let mut q = *p;
-    // `diagnose` refuses a campaign with unknown gains before any simulation
-    // ([`crate::campaign::Campaign::gains_known`]); an unknown one keeps `p`'s
-    if let Ok(k) = c.controller_for(&c.info.tests[i]) {
-        q.controller = k;
-    }
+    // the gains the campaign gives (the test's own over the campaign's); a gain it does
+    // not give is `p`'s: the closed-loop fit's when the campaign left it unknown
+    let spec = &c.info.tests[i];
+    q.controller = spec
+        .controller
+        .over(&c.info.controller)
+        .apply(&p.controller);
     let inputs = c.records[i].inputs();
     let end = part.range(inputs.len()).end;
     simulate_run_with(

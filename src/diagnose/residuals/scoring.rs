@@ -94,40 +94,76 @@ pub fn scores(
         score: [f64::NAN; 5],
         residual: [f64::NAN; 5],
     };
-    let range = part.range(r.len());
-    if range.len() < 2 {
-        return out;
-    }
-    let bands = octave_bands(sample_rate_hz);
-    let nyquist = sample_rate_hz / 2.0;
     for ch in 0..CHANNELS.len() {
-        let Some(m) = measured(r, ch) else { continue };
-        let s = noise.of(ch);
-        if !s.is_finite() {
+        let Some(bands) = channel_bands(r, pred, noise, part, sample_rate_hz, ch) else {
             continue;
-        }
-        let white = white_variance(noise, ch);
-        let locked = |k: usize| simulated(&pred.locked[k], ch);
-        let residual: Vec<f64> = range.clone().map(|k| m[k] - locked(k)).collect();
-        let spread = pred.spread(range.clone(), ch);
-        // a run that diverged ([`crate::solver::simulate_record`] marks it NaN) predicts
-        // nothing: an infinite score, never a cell left out as if the channel were absent
-        if residual
-            .iter()
-            .chain(spread.iter().flatten())
-            .any(|x| !x.is_finite())
-        {
+        };
+        if bands.is_empty() {
+            // a diverged run predicts nothing: an infinite score, never a cell left out
+            // as if the channel were absent
             out.score[ch] = f64::INFINITY;
             out.residual[ch] = f64::INFINITY;
             continue;
         }
-        let meas_bands = band_split(&residual, &bands, sample_rate_hz);
-        let spread_bands: Vec<Vec<Vec<f64>>> = spread
-            .iter()
-            .map(|x| band_split(x, &bands, sample_rate_hz))
-            .collect();
-        let (mut score, mut ratio) = (0.0, 0.0);
-        for (b, &(lo, hi)) in bands.iter().enumerate() {
+        let nb = bands.len() as f64;
+        let score: f64 = bands.iter().map(|b| b.score_term).sum();
+        let ratio: f64 = bands.iter().map(|b| b.ratio).sum();
+        out.score[ch] = (score / nb).max(0.0).sqrt();
+        out.residual[ch] = (ratio / nb).sqrt();
+    }
+    out
+}
+
+/// One octave band of a cell: its edges, the mean of `P_meas/P_pred` over its windows
+/// and its term of the score.
+#[derive(Debug, Clone, Copy)]
+pub struct BandScore {
+    pub band_hz: (f64, f64),
+    pub ratio: f64,
+    pub score_term: f64,
+}
+
+/// The octave bands of channel `ch` of a prediction over `part` (see [`scores`]): `None`
+/// when the channel is absent (or has no noise estimate) or `part` is too short, empty
+/// when the run diverged (a non-finite residual or spread).
+pub fn channel_bands(
+    r: &Record,
+    pred: &Prediction,
+    noise: &NoiseFloor,
+    part: Part,
+    sample_rate_hz: f64,
+    ch: usize,
+) -> Option<Vec<BandScore>> {
+    let range = part.range(r.len());
+    let m = measured(r, ch)?;
+    let s = noise.of(ch);
+    if range.len() < 2 || !s.is_finite() {
+        return None;
+    }
+    let bands = octave_bands(sample_rate_hz);
+    let nyquist = sample_rate_hz / 2.0;
+    let white = white_variance(noise, ch);
+    let residual: Vec<f64> = range
+        .clone()
+        .map(|k| m[k] - simulated(&pred.locked[k], ch))
+        .collect();
+    let spread = pred.spread(range, ch);
+    if residual
+        .iter()
+        .chain(spread.iter().flatten())
+        .any(|x| !x.is_finite())
+    {
+        return Some(Vec::new());
+    }
+    let meas_bands = band_split(&residual, &bands, sample_rate_hz);
+    let spread_bands: Vec<Vec<Vec<f64>>> = spread
+        .iter()
+        .map(|x| band_split(x, &bands, sample_rate_hz))
+        .collect();
+    let out = bands
+        .iter()
+        .enumerate()
+        .map(|(b, &(lo, hi))| {
             let width = hi - lo;
             let window =
                 ((WINDOW_DOF * sample_rate_hz / (2.0 * width)).ceil() as usize).max(SCORE_WINDOW);
@@ -136,14 +172,14 @@ pub fn scores(
             let (q, log) = band_score(&meas_bands[b], &sp, window, white * share);
             // the log term relative to the floor's share of the band, so that a model
             // predicting the floor scores as the ratio alone
-            score += q + log - (s * s * share).ln();
-            ratio += q;
-        }
-        let nb = bands.len() as f64;
-        out.score[ch] = (score / nb).max(0.0).sqrt();
-        out.residual[ch] = (ratio / nb).sqrt();
-    }
-    out
+            BandScore {
+                band_hz: (lo, hi),
+                ratio: q,
+                score_term: q + log - (s * s * share).ln(),
+            }
+        })
+        .collect();
+    Some(out)
 }
 
 /// [`CellScores`] of `p` on test `i` over `part` (one [`predict`] and [`scores`]).
@@ -180,16 +216,63 @@ pub(super) fn test_scores_held(
     noise: &NoiseFloor,
     to_envelope: bool,
 ) -> CellScores {
-    let pred = predict(p, c, i, part.simulated(), noise);
-    let range = part.range(c.records[i].len());
-    let locked = &pred.locked[range.start..range.end.min(pred.locked.len())];
-    if to_envelope && crate::model::limits::first_exceeded(p, locked).is_some() {
-        return CellScores {
-            score: [f64::INFINITY; 5],
-            residual: [f64::INFINITY; 5],
-        };
-    }
-    scores(&c.records[i], &pred, noise, part, c.sample_rate_of(i))
+    test_scores_of_parts(p, c, i, &[part], noise, to_envelope)[0]
+}
+
+/// [`CellScores`] of `p` on test `i` over each of `parts`, from one [`predict`] over the
+/// whole test; held to the envelope over each part with `to_envelope` (see
+/// [`test_scores_in_envelope`]).
+pub fn test_scores_of_parts(
+    p: &Params,
+    c: &Campaign,
+    i: usize,
+    parts: &[Part],
+    noise: &NoiseFloor,
+    to_envelope: bool,
+) -> Vec<CellScores> {
+    let simulated = if parts.iter().all(|&q| q == Part::Fit) {
+        Part::Fit
+    } else {
+        Part::Whole
+    };
+    let pred = predict(p, c, i, simulated, noise);
+    parts
+        .iter()
+        .map(|&part| {
+            let range = part.range(c.records[i].len());
+            let locked =
+                &pred.locked[range.start.min(pred.locked.len())..range.end.min(pred.locked.len())];
+            if to_envelope
+                && crate::model::limits::first_exceeded(p, locked).is_some()
+                && !measured_beyond_envelope(p, &c.records[i], range)
+            {
+                return CellScores {
+                    score: [f64::INFINITY; 5],
+                    residual: [f64::INFINITY; 5],
+                };
+            }
+            scores(&c.records[i], &pred, noise, part, c.sample_rate_of(i))
+        })
+        .collect()
+}
+
+/// Whether the measured table itself left the envelope over `range`, as far as its
+/// channels show: the LVDT beyond the stroke limit, or the force channel beyond the load
+/// the pressure limit allows (`P_L A`). Then a model that leaves it too is not penalised:
+/// it follows the table (a heavily saturated table drives its load pressure to the
+/// relief as the true one does).
+fn measured_beyond_envelope(p: &Params, r: &Record, range: std::ops::Range<usize>) -> bool {
+    use crate::model::limits::{PRESSURE_HIGH_FACTOR, STROKE_FACTOR};
+    let stroke_m = STROKE_FACTOR * p.limits.stroke_m;
+    let force_n = PRESSURE_HIGH_FACTOR * p.actuator.supply_pressure_pa * p.actuator.piston_area_m2;
+    let beyond = |x: Option<&Vec<f64>>, limit: f64| {
+        x.is_some_and(|x| {
+            x[range.start.min(x.len())..range.end.min(x.len())]
+                .iter()
+                .any(|v| v.abs() > limit)
+        })
+    };
+    beyond(r.displacement_m.as_ref(), stroke_m) || beyond(r.force_n.as_ref(), force_n)
 }
 
 /// Sum over `tests` and channels of the squared predictive scores over `part`: the

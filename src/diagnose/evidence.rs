@@ -1,0 +1,129 @@
+//! Whether a fitted candidate is evidence of its effect (issue 17 part 3): a near-empty
+//! candidate (a deadband of 0.0001, a foundation whose damping sits at its bound) fitted
+//! to physics outside the catalogue is not a cause, however much it helps.
+
+use super::effect::Effect;
+use std::collections::BTreeMap;
+
+/// A strength parameter is significant when it lies more than this many sigma from its
+/// no-effect value: two sigma, the usual 95 % two-sided test for a Gaussian estimate.
+pub const EVIDENCE_SIGMAS: f64 = 2.0;
+
+/// A parameter within this fraction of its range's width (or, on a range spanning
+/// decades, of its bound's value) from a bound of its fitting range sits at the bound:
+/// the optimiser was stopped by the range, not by the data, so its value is not an
+/// estimate. One in a thousand is well below any fit's precision here (percents).
+const AT_BOUND_FRACTION: f64 = 1e-3;
+
+/// Why the fitted `parameters` (with their one-sigma `sigma`, where the fit gives them)
+/// of `effect` are not evidence of it, fitted within `lower..upper` (one per parameter
+/// in declaration order), if they are not; `None` when they are.
+pub(super) fn not_evidence(
+    effect: Effect,
+    parameters: &BTreeMap<String, f64>,
+    sigma: &BTreeMap<String, f64>,
+    lower: &[f64],
+    upper: &[f64],
+) -> Option<String> {
+    for ((key, lo), hi) in effect.parameters().iter().zip(lower).zip(upper) {
+        let Some(&x) = parameters.get(*key) else {
+            continue;
+        };
+        if let Some(bound) = at_bound(x, *lo, *hi) {
+            return Some(format!(
+                "{}.{key} = {x:.4e} sits at the {bound} of its fitting range [{lo:.4e}, {hi:.4e}]: the range stopped the fit, not the data",
+                effect.name()
+            ));
+        }
+    }
+    for &(key, none) in effect.no_effect() {
+        let (Some(&x), Some(&s)) = (parameters.get(key), sigma.get(key)) else {
+            continue;
+        };
+        if s.is_finite() && (x - none).abs() <= EVIDENCE_SIGMAS * s {
+            return Some(format!(
+                "{}.{key} = {x:.4e} +- {s:.2e} (1 sigma) is within {EVIDENCE_SIGMAS} sigma of {none}, where the effect vanishes",
+                effect.name()
+            ));
+        }
+    }
+    None
+}
+
+/// `"lower bound"` or `"upper bound"` when `x` sits at one ([`AT_BOUND_FRACTION`]).
+fn at_bound(x: f64, lo: f64, hi: f64) -> Option<&'static str> {
+    let width = hi - lo;
+    let near = |b: f64| (x - b).abs() <= AT_BOUND_FRACTION * width.min(b.abs().max(width * 1e-6));
+    if near(lo) {
+        Some("lower bound")
+    } else if near(hi) {
+        Some("upper bound")
+    } else {
+        None
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn map(pairs: &[(&str, f64)]) -> BTreeMap<String, f64> {
+        pairs.iter().map(|(k, v)| (k.to_string(), *v)).collect()
+    }
+
+    #[test]
+    fn a_parameter_at_a_bound_is_not_evidence() {
+        let lo = [200.0, 0.5, 0.002];
+        let hi = [2e5, 60.0, 0.5];
+        let fitted = map(&[
+            ("mass_kg", 8e3),
+            ("frequency_hz", 6.0),
+            ("damping_ratio", 0.002),
+        ]);
+        let why = not_evidence(Effect::Specimen, &fitted, &map(&[]), &lo, &hi).unwrap();
+        assert!(
+            why.contains("damping_ratio") && why.contains("lower bound"),
+            "{why}"
+        );
+        let inside = map(&[
+            ("mass_kg", 8e3),
+            ("frequency_hz", 6.0),
+            ("damping_ratio", 0.03),
+        ]);
+        assert_eq!(
+            not_evidence(Effect::Specimen, &inside, &map(&[]), &lo, &hi),
+            None
+        );
+    }
+
+    /// A deadband of 1e-4 +- 1e-4 cannot be told from none; 1e-2 +- 1e-3 can.
+    #[test]
+    fn a_strength_within_two_sigma_of_no_effect_is_not_evidence() {
+        let (lo, hi) = ([0.0], [0.2]);
+        let weak = map(&[("deadband", 1e-3)]);
+        let why = not_evidence(
+            Effect::ValveDeadband,
+            &weak,
+            &map(&[("deadband", 1e-3)]),
+            &lo,
+            &hi,
+        );
+        assert!(why.unwrap().contains("vanishes"));
+        let strong = map(&[("deadband", 1e-2)]);
+        assert_eq!(
+            not_evidence(
+                Effect::ValveDeadband,
+                &strong,
+                &map(&[("deadband", 1e-3)]),
+                &lo,
+                &hi
+            ),
+            None
+        );
+        // no sigma (a fit without covariance): only the bounds judge
+        assert_eq!(
+            not_evidence(Effect::ValveDeadband, &weak, &map(&[]), &lo, &hi),
+            None
+        );
+    }
+}

@@ -1,0 +1,172 @@
+//! Where the residual the final model leaves lies (issue 17 part 4): the report cells it
+//! still misses, worst first, each with the octave band that holds most of its residual
+//! and what the residual depends on (direction of motion, amplitude, load pressure). This
+//! is what an engineer needs to look for physics no catalogue row describes.
+
+use super::output::{PartRows, UnexplainedCell};
+use super::part::Part;
+use super::residuals::{channel_bands, measured, predict, simulated, NoiseFloor, CHANNELS};
+use super::EXPLAINED_RATIO;
+use crate::campaign::Campaign;
+use crate::params::Params;
+use crate::Outputs;
+use serde::Serialize;
+
+/// Cells listed at most: the worst ones locate the physics; a long tail repeats them.
+pub const MAX_UNEXPLAINED_CELLS: usize = 12;
+
+/// RMS residual of a cell (noise RMS units) split by a condition of the motion: while it
+/// holds and while it does not. `None` where a side has too few samples to measure.
+#[derive(Debug, Clone, Copy, Serialize)]
+pub struct Split {
+    pub when: Option<f64>,
+    pub otherwise: Option<f64>,
+}
+
+/// What a cell's residual depends on, read off the model's own run.
+#[derive(Debug, Clone, Copy, Serialize)]
+pub struct Dependence {
+    /// While the table moves in the positive direction (velocity > 0) against negative.
+    pub moving_positive: Split,
+    /// While the displacement is beyond half its largest excursion against within it.
+    pub large_displacement: Split,
+    /// While the load pressure is beyond half its largest value against within it.
+    pub high_load_pressure: Split,
+}
+
+/// Fewer samples than this on a side of a split give no figure: a tenth of a second at
+/// 512 Hz, a few cycles of the oil column, enough for an RMS within about 10 %.
+const MIN_SPLIT_SAMPLES: usize = 50;
+
+/// The report cells (of `tests`, campaign order) the baseline missed (`baseline_missed`)
+/// that `p`, whose report rows are `rows`, still misses (residual above
+/// [`EXPLAINED_RATIO`]), worst first, at most [`MAX_UNEXPLAINED_CELLS`].
+pub(super) fn unexplained_cells(
+    p: &Params,
+    c: &Campaign,
+    rows: &PartRows,
+    baseline_missed: &[[bool; 5]],
+    noise: &NoiseFloor,
+) -> Vec<UnexplainedCell> {
+    let mut worst: Vec<(usize, usize, f64)> = rows
+        .residual
+        .iter()
+        .zip(baseline_missed)
+        .enumerate()
+        .flat_map(|(i, (r, m))| {
+            (0..CHANNELS.len())
+                .filter(move |&ch| m[ch] && !(r[ch] <= EXPLAINED_RATIO))
+                .map(move |ch| (i, ch, r[ch]))
+        })
+        .collect();
+    worst.sort_by(|a, b| b.2.total_cmp(&a.2));
+    worst.truncate(MAX_UNEXPLAINED_CELLS);
+    worst
+        .into_iter()
+        .filter_map(|(i, ch, residual)| locate(p, c, i, ch, residual, noise))
+        .collect()
+}
+
+/// One cell located: its worst band and its dependences.
+fn locate(
+    p: &Params,
+    c: &Campaign,
+    i: usize,
+    ch: usize,
+    residual: f64,
+    noise: &NoiseFloor,
+) -> Option<UnexplainedCell> {
+    let pred = predict(p, c, i, Part::Whole, noise);
+    let r = &c.records[i];
+    let bands = channel_bands(r, &pred, noise, Part::Report, c.sample_rate_of(i), ch)?;
+    let worst = bands.iter().max_by(|a, b| a.ratio.total_cmp(&b.ratio));
+    let (band_hz, band_residual) = match worst {
+        Some(b) => ([b.band_hz.0, b.band_hz.1], b.ratio.sqrt()),
+        // a diverged run has no band to name
+        None => ([0.0, c.sample_rate_of(i) / 2.0], f64::INFINITY),
+    };
+    let range = Part::Report.range(r.len());
+    let m = measured(r, ch)?;
+    let s = noise.of(ch);
+    let run = &pred.locked[range.clone()];
+    let residual_units: Vec<f64> = range
+        .clone()
+        .map(|k| (m[k] - simulated(&pred.locked[k], ch)) / s)
+        .collect();
+    let depends_on = Dependence {
+        moving_positive: split(&residual_units, run, |o| o.velocity_m_s > 0.0),
+        large_displacement: split_at_half(&residual_units, run, |o| o.displacement_m.abs()),
+        high_load_pressure: split_at_half(&residual_units, run, |o| {
+            (o.pressure_a_pa - o.pressure_b_pa).abs()
+        }),
+    };
+    Some(UnexplainedCell {
+        test: c.info.tests[i].name.clone(),
+        channel: CHANNELS[ch].to_string(),
+        band_hz,
+        residual,
+        band_residual,
+        depends_on,
+    })
+}
+
+/// [`split`] at half the largest value of `of` over the run.
+fn split_at_half(residual: &[f64], run: &[Outputs], of: impl Fn(&Outputs) -> f64) -> Split {
+    let largest = run.iter().map(&of).fold(0.0, f64::max);
+    split(residual, run, |o| of(o) > 0.5 * largest)
+}
+
+/// RMS of `residual` where `when` holds on the model's run, and where it does not.
+fn split(residual: &[f64], run: &[Outputs], when: impl Fn(&Outputs) -> bool) -> Split {
+    let (mut on, mut off) = ((0.0, 0usize), (0.0, 0usize));
+    for (x, o) in residual.iter().zip(run) {
+        let side = if when(o) { &mut on } else { &mut off };
+        side.0 += x * x;
+        side.1 += 1;
+    }
+    let rms = |(sum, n): (f64, usize)| (n >= MIN_SPLIT_SAMPLES).then(|| (sum / n as f64).sqrt());
+    Split {
+        when: rms(on),
+        otherwise: rms(off),
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn outputs(velocity_m_s: f64, displacement_m: f64) -> Outputs {
+        Outputs {
+            valve_command: 0.0,
+            spool_position: 0.0,
+            displacement_m,
+            velocity_m_s,
+            acceleration_m_s2: 0.0,
+            actuator_force_n: 0.0,
+            pressure_a_pa: 0.0,
+            pressure_b_pa: 0.0,
+        }
+    }
+
+    /// A residual that lives only while the table moves up shows on that side alone.
+    #[test]
+    fn a_direction_dependent_residual_shows_on_its_side() {
+        let n = 400;
+        let run: Vec<Outputs> = (0..n)
+            .map(|k| {
+                let phase = k as f64 / 50.0;
+                outputs(phase.cos(), phase.sin())
+            })
+            .collect();
+        let residual: Vec<f64> = run
+            .iter()
+            .map(|o| if o.velocity_m_s > 0.0 { 3.0 } else { 0.0 })
+            .collect();
+        let s = split(&residual, &run, |o| o.velocity_m_s > 0.0);
+        assert_eq!(s.when, Some(3.0));
+        assert_eq!(s.otherwise, Some(0.0));
+        // too few samples on a side: no figure
+        let s = split(&residual[..60], &run[..60], |o| o.velocity_m_s > 0.0);
+        assert!(s.otherwise.is_none());
+    }
+}

@@ -1,0 +1,101 @@
+//! The diagnosis report's account of causes: the accepted ones with their gain, the
+//! partial explanations, and where the residual left lies (issue 17 parts 2-4).
+
+use super::escape_html;
+use crate::diagnose::{Diagnosis, Split};
+use std::fmt::Write;
+
+/// `a / b` of a split, `-` where a side has no figure.
+fn split_text(s: &Split) -> String {
+    let f = |x: Option<f64>| x.map(|v| format!("{v:.1}")).unwrap_or_else(|| "-".into());
+    format!("{} / {}", f(s.when), f(s.otherwise))
+}
+
+/// `key = value +- sigma` for each parameter.
+fn parameters_text(
+    parameters: &std::collections::BTreeMap<String, f64>,
+    sigma: &std::collections::BTreeMap<String, f64>,
+) -> String {
+    parameters
+        .iter()
+        .map(|(k, v)| match sigma.get(k) {
+            Some(s) => format!("{k} = {v:.5} +- {s:.2e}"),
+            None => format!("{k} = {v:.5}"),
+        })
+        .collect::<Vec<_>>()
+        .join(", ")
+}
+
+/// The causes, partial explanations and unexplained cells as HTML and Markdown sections.
+pub(super) fn write_causes(html: &mut String, md: &mut String, d: &Diagnosis) {
+    html.push_str("<h2>Causes, in order of acceptance</h2>");
+    md.push_str("\n## Causes, in order of acceptance\n\n");
+    if d.causes.is_empty() {
+        html.push_str("<p>None.</p>");
+        md.push_str("None.\n");
+    } else {
+        html.push_str("<table><tr><th>effect</th><th>parameters (1 sigma)</th><th>gain</th></tr>");
+        md.push_str("| effect | parameters (1 sigma) | gain |\n|---|---|---|\n");
+        for c in &d.causes {
+            let ps = parameters_text(&c.parameters, &c.sigma);
+            let _ = write!(
+                html,
+                "<tr><td>{}</td><td style=\"text-align:left\">{}</td><td>{:.2}</td></tr>",
+                c.effect.name(),
+                escape_html(&ps),
+                c.gain
+            );
+            let _ = writeln!(md, "| {} | {ps} | {:.2} |", c.effect.name(), c.gain);
+        }
+        html.push_str("</table>");
+    }
+    for why in &d.not_testable {
+        let _ = write!(html, "<p>{}.</p>", escape_html(why));
+        let _ = writeln!(md, "\n{why}.");
+    }
+    for p in &d.partial {
+        let line = format!(
+            "Partial explanation, not a cause: {} divides the selection score by {:.2}, but {}.",
+            p.effect.name(),
+            p.selection_gain,
+            p.why_not_a_cause
+        );
+        let _ = write!(html, "<p>{}</p>", escape_html(&line));
+        let _ = writeln!(md, "\n{line}");
+    }
+    if d.unexplained.is_empty() {
+        return;
+    }
+    html.push_str(
+        "<h2>What is left unexplained (report quarter, worst first)</h2>\
+         <p>Residual in noise units; the band holds the cell's largest residual; the splits give \
+         the RMS residual while the condition holds / while it does not.</p>\
+         <table><tr><th>test</th><th>channel</th><th>band (Hz)</th><th>residual</th>\
+         <th>band residual</th><th>moving + / -</th><th>large / small displacement</th>\
+         <th>high / low load pressure</th></tr>",
+    );
+    md.push_str(
+        "\n## What is left unexplained (report quarter, worst first)\n\n\
+         | test | channel | band (Hz) | residual | band residual | moving + / - | large / small displacement | high / low load pressure |\n\
+         |---|---|---|---|---|---|---|---|\n",
+    );
+    for u in &d.unexplained {
+        let cells = [
+            u.test.clone(),
+            u.channel.clone(),
+            format!("{:.0}-{:.0}", u.band_hz[0], u.band_hz[1]),
+            format!("{:.2}", u.residual),
+            format!("{:.2}", u.band_residual),
+            split_text(&u.depends_on.moving_positive),
+            split_text(&u.depends_on.large_displacement),
+            split_text(&u.depends_on.high_load_pressure),
+        ];
+        html.push_str("<tr>");
+        for c in &cells {
+            let _ = write!(html, "<td>{}</td>", escape_html(c));
+        }
+        html.push_str("</tr>");
+        let _ = writeln!(md, "| {} |", cells.join(" | "));
+    }
+    html.push_str("</table>");
+}
