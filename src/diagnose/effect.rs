@@ -15,25 +15,30 @@ pub enum Effect {
     StickSlip,
     FlowSaturation,
     ValveDeadband,
+    FrictionAsymmetry,
+    FlowAsymmetry,
+    FreePlay,
 }
 
-/// The effects the diagnosis fits: the catalogue's first five. The second part of the
-/// catalogue (`friction_asymmetry`, `flow_asymmetry`, `free_play`, and the `specimen`'s
-/// modes 2 and 3, declared as its `unfitted` parameters) is not a candidate yet: it has no
-/// informed start; issue 17 work in progress.
-pub const EFFECTS: [Effect; 5] = [
+/// The effects the diagnosis fits: the whole catalogue, in its order. The `specimen`'s
+/// modes 2 and 3 (its `unfitted` parameters) are not fitted yet: a second mode shows as
+/// an unexplained cell near its frequency.
+pub const EFFECTS: [Effect; 8] = [
     Effect::Specimen,
     Effect::Foundation,
     Effect::StickSlip,
     Effect::FlowSaturation,
     Effect::ValveDeadband,
+    Effect::FrictionAsymmetry,
+    Effect::FlowAsymmetry,
+    Effect::FreePlay,
 ];
 
 impl Effect {
     /// The catalogue entry of this effect ([`crate::effects::CATALOGUE`], the one place
     /// its parameters, FMU variables, fitting ranges and signature tests are declared).
     pub fn catalogue(self) -> &'static crate::effects::Effect {
-        // the diagnosis fits the catalogue's first five effects, in its order
+        // the diagnosis fits the catalogue's effects, in its order
         &crate::effects::CATALOGUE[self as usize]
     }
 

@@ -17,6 +17,9 @@ pub struct PartRows {
     pub score: Vec<[f64; 5]>,
     /// The standardised residual ([`super::residuals::CellScores::residual`]).
     pub residual: Vec<[f64; 5]>,
+    /// Whether the model's noise-free run left the operating envelope (spec section 8)
+    /// over the part where the measured table did not, per test.
+    pub left_envelope: Vec<bool>,
 }
 
 /// A fitted candidate effect.

@@ -4,7 +4,9 @@
 //! cells; then searches for causes, one effect at a time, until none passes.
 
 use super::baseline::{refine_output_error, BASELINE_ITERATIONS};
-use super::candidates::{fit_candidate, heldout_scores, scored_candidate, Fitted, POLISH_ROUNDS};
+use super::candidates::{
+    fit_candidate, heldout_scores, scored_candidate, Fitted, Hold, POLISH_ROUNDS,
+};
 use super::effect::{Effect, EFFECTS};
 use super::locate::unexplained_cells;
 use super::output::{Candidate, Cause, Diagnosis, PartRows, Partial};
@@ -204,6 +206,7 @@ impl Diagnoser<'_> {
         effects: &[Effect],
         bases: [Params; 2],
         missed: &Missed,
+        hold: &Hold,
         (step0, total): (usize, usize),
     ) -> Vec<Candidate> {
         let done = std::sync::atomic::AtomicUsize::new(step0);
@@ -219,6 +222,7 @@ impl Diagnoser<'_> {
                     &self.noise,
                     CANDIDATE_LSQ,
                     &self.whitening,
+                    hold,
                 );
                 let n = done.fetch_add(1, std::sync::atomic::Ordering::Relaxed);
                 self.tick(n + 1, total, &format!("fitted {}", e.name()));
@@ -235,7 +239,13 @@ impl Diagnoser<'_> {
 
     /// `from` refined like the baseline (every fitting test, the friction shape and valve
     /// dynamics free too) with the actuator variant `model`, scored.
-    fn polish(&self, from: &Candidate, model: ActuatorModel, missed: &Missed) -> Option<Candidate> {
+    fn polish(
+        &self,
+        from: &Candidate,
+        model: ActuatorModel,
+        missed: &Missed,
+        hold: &Hold,
+    ) -> Option<Candidate> {
         let theta: Vec<f64> = from
             .effect
             .parameters()
@@ -282,6 +292,7 @@ impl Diagnoser<'_> {
             },
             &self.tests,
             &self.noise,
+            hold,
         );
         polished.summarise(&|rows| missed.rms(rows), &|rows| {
             self.report_missed.rms(rows)
@@ -296,13 +307,14 @@ impl Diagnoser<'_> {
     /// fits better as a nonlinear one), then further rounds while unexplained and
     /// improving (a heavily saturated table bends the baseline by tens of percent). Every
     /// decision here reads the selection quarter only.
-    fn polish_best(&self, cand: &Candidate, missed: &Missed) -> Candidate {
+    fn polish_best(&self, cand: &Candidate, missed: &Missed, hold: &Hold) -> Candidate {
         let better = |a: Option<Candidate>, b: &Candidate| a.filter(|a| a.score < b.score);
         let own = cand.params.actuator.model;
-        let mut best = better(self.polish(cand, own, missed), cand).unwrap_or_else(|| cand.clone());
+        let mut best =
+            better(self.polish(cand, own, missed, hold), cand).unwrap_or_else(|| cand.clone());
         if !explains(&best) {
             if let Some(other) = ActuatorModel::ALL.into_iter().find(|&m| m != own) {
-                if let Some(p) = better(self.polish(cand, other, missed), &best) {
+                if let Some(p) = better(self.polish(cand, other, missed, hold), &best) {
                     best = p;
                 }
             }
@@ -312,7 +324,7 @@ impl Diagnoser<'_> {
                 break;
             }
             match better(
-                self.polish(&best, best.params.actuator.model, missed),
+                self.polish(&best, best.params.actuator.model, missed, hold),
                 &best,
             ) {
                 Some(p) if p.score < POLISH_MIN_IMPROVEMENT * best.score => best = p,
@@ -326,25 +338,40 @@ impl Diagnoser<'_> {
         best
     }
 
+    /// An accepted cause polished until a round gains less than [`POLISH_MIN_IMPROVEMENT`]
+    /// (at most [`POLISH_ROUNDS`] more), before a further search: [`Self::polish_best`]
+    /// stops as soon as the selection quarter is explained, but a further search runs
+    /// because some cell is not, and each of its candidates refits the baseline parameters
+    /// too; an unsettled model would credit them with that refit (a deadband of zero
+    /// scored five times better than the accepted flow saturation it extended).
+    fn settle(&self, mut best: Candidate, missed: &Missed, hold: &Hold) -> Candidate {
+        for _ in 0..POLISH_ROUNDS {
+            match self.polish(&best, best.params.actuator.model, missed, hold) {
+                Some(p) if p.score < POLISH_MIN_IMPROVEMENT * best.score => best = p,
+                Some(p) if p.score < best.score => return p,
+                _ => break,
+            }
+        }
+        best
+    }
+
     /// One search on top of `current` with the effects not yet accepted: every candidate
     /// fitted, the best polished. Returns the candidates (the best one polished) and the
     /// index of the best, `None` when no cell is missed or no candidate could be fitted.
     fn search(
         &self,
         current: &Current,
-        accepted: &[Effect],
+        effects: &[Effect],
         round: usize,
     ) -> Option<(Vec<Candidate>, usize, Missed)> {
         let missed = Missed::of(&current.select.residual);
-        if !missed.any {
+        if !missed.any || effects.is_empty() {
             return None;
         }
-        let effects: Vec<Effect> = self
-            .testable
-            .iter()
-            .copied()
-            .filter(|e| !accepted.contains(e))
-            .collect();
+        let hold = Hold {
+            select: &current.select,
+            report: &current.report,
+        };
         let step0 = PROGRESS_SETUP + round * SEARCH_STEPS;
         let total = step0 + SEARCH_STEPS;
         self.tick(
@@ -353,13 +380,13 @@ impl Diagnoser<'_> {
             &format!("search {}: fitting every effect", round + 1),
         );
         let mut candidates = self.fit_candidates(
-            &effects,
+            effects,
             [current.params, current.section4],
             &missed,
+            &hold,
             (step0, total),
         );
-        let k = (0..candidates.len())
-            .min_by(|&a, &b| candidates[a].score.total_cmp(&candidates[b].score))?;
+        let k = best_candidate(&candidates, self.table.table.mass_kg)?;
         self.tick(
             total - 1,
             total,
@@ -369,9 +396,25 @@ impl Diagnoser<'_> {
                 candidates[k].effect.name()
             ),
         );
-        candidates[k] = self.polish_best(&candidates[k], &missed);
+        candidates[k] = self.polish_best(&candidates[k], &missed, &hold);
         Some((candidates, k, missed))
     }
+}
+
+/// The candidate a search polishes and judges: the best-scoring one that is physical and
+/// evidence of its effect, else the best-scoring one (then a partial explanation at
+/// most). A candidate whose effect sits at its no-effect value (a deadband of zero) still
+/// scores better than the model it extends, by refitting that model's own parameters: it
+/// must not hide a weaker-scoring candidate that is evidence of a real second effect.
+fn best_candidate(candidates: &[Candidate], table_mass_kg: f64) -> Option<usize> {
+    let by_score = |a: &usize, b: &usize| candidates[*a].score.total_cmp(&candidates[*b].score);
+    let evidence = (0..candidates.len())
+        .filter(|&i| {
+            candidates[i].not_evidence.is_none()
+                && unphysical(&candidates[i], table_mass_kg).is_none()
+        })
+        .min_by(by_score);
+    evidence.or_else(|| (0..candidates.len()).min_by(by_score))
 }
 
 /// What one search concluded about its best candidate.
@@ -397,6 +440,19 @@ fn verdict(best: &Candidate, current_score: f64, table_mass_kg: f64) -> Verdict 
         Some(why) => Verdict::Partial(why.clone()),
         None => Verdict::Cause,
     }
+}
+
+/// The effects a search after the first fits again: those whose first candidate improved
+/// on the baseline's selection score (`baseline_score`, on the cells the baseline misses).
+/// A second effect's cells are missed by the baseline too, so its candidate already
+/// helps there with the first effect still missing; an effect that could not improve on
+/// the baseline at all is not fitted again (each fit costs seconds to a minute).
+fn worth_searching_again(first: &[Candidate], baseline_score: f64) -> Vec<Effect> {
+    first
+        .iter()
+        .filter(|c| c.score < baseline_score)
+        .map(|c| c.effect)
+        .collect()
 }
 
 /// Diagnose the screened campaign `c` from its baseline identification `id`.
@@ -445,7 +501,7 @@ pub(super) fn diagnose_with(
     let (base, actuator_costs) = d.refine_both_variants(base);
     d.table = base;
     let baseline_rows = d.baseline_rows(&base);
-    let (baseline_select, baseline_report) = heldout_scores(&base, c, &d.tests, &d.noise, false);
+    let (baseline_select, baseline_report) = heldout_scores(&base, c, &d.tests, &d.noise, None);
     d.report_missed = Missed::of(&baseline_report.residual);
     let baseline_heldout = d.report_missed.rms(&baseline_report.residual);
     let baseline_score = Missed::of(&baseline_select.residual).rms(&baseline_select.score);
@@ -464,18 +520,31 @@ pub(super) fn diagnose_with(
     let (mut causes, mut partial) = (Vec::new(), Vec::new());
     let mut first_candidates = Vec::new();
     let mut cause_rejected = None;
+    let mut searched = d.testable.clone();
     for round in 0..MAX_CAUSES {
-        let accepted: Vec<Effect> = causes.iter().map(|k: &Cause| k.effect).collect();
-        let Some((candidates, k, missed)) = d.search(&current, &accepted, round) else {
+        let Some((candidates, k, missed)) = d.search(&current, &searched, round) else {
             break;
         };
         let best = candidates[k].clone();
         if round == 0 {
+            searched = worth_searching_again(&candidates, baseline_score);
             first_candidates = candidates;
         }
+        searched.retain(|&e| e != best.effect);
         let current_score = missed.rms(&current.select.score);
         match verdict(&best, current_score, base.table.mass_kg) {
             Verdict::Cause => {
+                // the next search must not credit its candidates with what this model's
+                // own parameters still had to settle
+                let best = if round + 1 < MAX_CAUSES && Missed::of(&best.select.residual).any {
+                    let hold = Hold {
+                        select: &current.select,
+                        report: &current.report,
+                    };
+                    d.settle(best, &missed, &hold)
+                } else {
+                    best
+                };
                 let before = d.report_missed.rms(&current.report.residual);
                 causes.push(Cause {
                     effect: best.effect,
@@ -604,6 +673,52 @@ mod tests {
         let one_left = [[1.0, 1.0, 1.0, NAN, 1.0], [1.0, 1.0, 1.0, NAN, 2.5]];
         assert!(m.rms(&one_left) < EXPLAINED_RATIO);
         assert!(!m.all_explained_by(&one_left));
+    }
+
+    /// A search judges the best candidate that is evidence, not a better-scoring empty one.
+    #[test]
+    fn the_best_candidate_is_the_best_that_is_evidence() {
+        let scored = |e: Effect, score: f64, why: Option<&str>| {
+            let mut c = Candidate::empty(e);
+            c.score = score;
+            c.not_evidence = why.map(str::to_string);
+            c
+        };
+        let mut cands = vec![
+            scored(
+                Effect::ValveDeadband,
+                1.0,
+                Some("deadband at its lower bound"),
+            ),
+            scored(Effect::Foundation, 2.0, None),
+            scored(Effect::Specimen, 3.0, None),
+        ];
+        assert_eq!(best_candidate(&cands, 4e4), Some(1));
+        cands[1].not_evidence = Some("at a bound".into());
+        cands[2].not_evidence = Some("at a bound".into());
+        assert_eq!(best_candidate(&cands, 4e4), Some(0));
+        assert_eq!(best_candidate(&[], 4e4), None);
+    }
+
+    /// A later search fits again only the effects whose first candidate beat the baseline.
+    #[test]
+    fn only_effects_that_helped_once_are_searched_again() {
+        let scored = |e: Effect, score: f64| {
+            let mut c = Candidate::empty(e);
+            c.score = score;
+            c
+        };
+        let first = [
+            scored(Effect::Specimen, 2.0),
+            scored(Effect::FreePlay, 5.0),
+            scored(Effect::FlowSaturation, f64::INFINITY),
+            scored(Effect::FrictionAsymmetry, NAN),
+            scored(Effect::StickSlip, 4.9),
+        ];
+        assert_eq!(
+            worth_searching_again(&first, 5.0),
+            [Effect::Specimen, Effect::StickSlip]
+        );
     }
 
     /// A cause needs the gain on the selection quarter, physics and evidence; a candidate

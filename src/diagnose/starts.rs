@@ -1,6 +1,7 @@
 //! Physically informed starts of the candidates' fits: the apparent mass of the random
 //! tests (specimen, foundation), the velocity plateau (flow saturation), small grids.
 
+use super::direction_starts::{flow_ratio_start, friction_ratio_start};
 use super::effect::Effect;
 use crate::campaign::{Campaign, TestKind};
 use crate::identify::frf::{Welch, WelchOptions};
@@ -8,6 +9,10 @@ use crate::identify::select::random_roles;
 use crate::params::Params;
 use num_complex::Complex64;
 use std::f64::consts::PI;
+
+/// The rod's start as a share of the moving mass: the catalogue's 1.5 t rod and piston of
+/// the 41 t TREES Lab table (`free_play`'s default), scaled to the table.
+const ROD_MASS_FRACTION: f64 = 0.036;
 
 pub(super) fn indices(c: &Campaign, names: &[&str]) -> Vec<usize> {
     names
@@ -102,6 +107,12 @@ pub(super) fn starts(
             vec![vec![q.max(1e-3)]]
         }
         Effect::ValveDeadband => vec![vec![0.01], vec![0.03]],
+        // a grid either side of symmetry; the direction split adds its own start
+        Effect::FrictionAsymmetry | Effect::FlowAsymmetry => vec![vec![0.7], vec![1.4]],
+        Effect::FreePlay => [2e-4, 6e-4, 1.5e-3]
+            .iter()
+            .map(|&g| vec![g, ROD_MASS_FRACTION * m])
+            .collect(),
     }
 }
 
@@ -110,6 +121,8 @@ pub(super) fn starts(
 pub(super) fn informed_start(effect: Effect, c: &Campaign, base: &Params) -> Option<Vec<f64>> {
     match effect {
         Effect::Foundation => foundation_start(c, base.table.mass_kg),
+        Effect::FrictionAsymmetry => friction_ratio_start(c, base).map(|r| vec![r]),
+        Effect::FlowAsymmetry => flow_ratio_start(c).map(|r| vec![r]),
         _ => None,
     }
 }

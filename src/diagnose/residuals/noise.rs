@@ -69,12 +69,21 @@ impl NoiseFloor {
     pub fn loop_noise(&self, n: usize, seed: u64) -> Vec<SensorNoise> {
         let mut rng = ChaCha8Rng::seed_from_u64(seed);
         let normal = Normal::new(0.0, 1.0).expect("unit normal");
+        // a sensor no test recorded has no noise estimate (NaN): it feeds the loop none,
+        // rather than NaN that would end every noisy run (a campaign without an
+        // accelerometer, issue 16 part 5)
+        let level = |x: f64| if x.is_finite() { x } else { 0.0 };
         let s = &self.sensor;
+        let (d, a, f) = (
+            level(s.displacement_m),
+            level(s.acceleration_m_s2),
+            level(s.force_n),
+        );
         (0..n)
             .map(|_| SensorNoise {
-                displacement_m: s.displacement_m * normal.sample(&mut rng),
-                acceleration_m_s2: s.acceleration_m_s2 * normal.sample(&mut rng),
-                force_n: s.force_n * normal.sample(&mut rng),
+                displacement_m: d * normal.sample(&mut rng),
+                acceleration_m_s2: a * normal.sample(&mut rng),
+                force_n: f * normal.sample(&mut rng),
             })
             .collect()
     }

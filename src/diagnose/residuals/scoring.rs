@@ -216,20 +216,21 @@ pub(super) fn test_scores_held(
     noise: &NoiseFloor,
     to_envelope: bool,
 ) -> CellScores {
-    test_scores_of_parts(p, c, i, &[part], noise, to_envelope)[0]
+    test_scores_of_parts(p, c, i, &[part], noise, &[to_envelope])[0].0
 }
 
 /// [`CellScores`] of `p` on test `i` over each of `parts`, from one [`predict`] over the
-/// whole test; held to the envelope over each part with `to_envelope` (see
-/// [`test_scores_in_envelope`]).
+/// whole test, with whether its noise-free run left the envelope over each part where
+/// the measured table did not; held to the envelope over the parts where `hold` says so
+/// (see [`test_scores_in_envelope`]).
 pub fn test_scores_of_parts(
     p: &Params,
     c: &Campaign,
     i: usize,
     parts: &[Part],
     noise: &NoiseFloor,
-    to_envelope: bool,
-) -> Vec<CellScores> {
+    hold: &[bool],
+) -> Vec<(CellScores, bool)> {
     let simulated = if parts.iter().all(|&q| q == Part::Fit) {
         Part::Fit
     } else {
@@ -238,20 +239,24 @@ pub fn test_scores_of_parts(
     let pred = predict(p, c, i, simulated, noise);
     parts
         .iter()
-        .map(|&part| {
+        .zip(hold)
+        .map(|(&part, &held)| {
             let range = part.range(c.records[i].len());
             let locked =
                 &pred.locked[range.start.min(pred.locked.len())..range.end.min(pred.locked.len())];
-            if to_envelope
-                && crate::model::limits::first_exceeded(p, locked).is_some()
-                && !measured_beyond_envelope(p, &c.records[i], range)
-            {
-                return CellScores {
+            let left = crate::model::limits::first_exceeded(p, locked).is_some()
+                && !measured_beyond_envelope(p, &c.records[i], range);
+            if held && left {
+                let inf = CellScores {
                     score: [f64::INFINITY; 5],
                     residual: [f64::INFINITY; 5],
                 };
+                return (inf, left);
             }
-            scores(&c.records[i], &pred, noise, part, c.sample_rate_of(i))
+            (
+                scores(&c.records[i], &pred, noise, part, c.sample_rate_of(i)),
+                left,
+            )
         })
         .collect()
 }
