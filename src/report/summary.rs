@@ -91,17 +91,6 @@ fn bare_table_peak_hz(p: &Params) -> Option<f64> {
     Linearisation::new(&q).table_tf_figures().map(|f| f.peak_hz)
 }
 
-/// The device rows of the summary (no truth: a device is no parameter of the table).
-const DEVICE_ROWS: [&str; 7] = [
-    "device.force_n",
-    "device.yield_displacement_m",
-    "device.shape",
-    "device.viscous_n_s_m",
-    "device.stiffness_n_m",
-    "device.mass_kg",
-    "device.fit_percent",
-];
-
 /// The summary's rows: section 4's estimates, the device's when a test recorded
 /// displacement and force, and the closed loop's fitted parameters (prefixed
 /// `closed_loop:`), each with the truth where `truth` gives it.
@@ -120,8 +109,10 @@ pub fn summary_rows(id: &Identification, truth: Option<&Params>) -> Vec<Row> {
         .iter()
         .map(|(key, t)| row(key, truth.and_then(t)))
         .collect();
+    // the device's (no truth: a device is no parameter of the table)
     if id.device.is_some() {
-        rows.extend(DEVICE_ROWS.iter().map(|k| row(k, None)));
+        let device = estimates.iter().filter(|e| e.key.starts_with("device."));
+        rows.extend(device.map(|e| row(e.key, None)));
     }
     if let Some(cl) = &id.closed_loop {
         rows.extend(cl.estimates.iter().map(|e| {
