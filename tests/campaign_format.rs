@@ -7,6 +7,7 @@ use shaketable::campaign::format::{
     read_campaign, read_record, read_record_str, read_reference, write_campaign, write_record,
     CampaignError,
 };
+use shaketable::campaign::provenance::Source;
 use shaketable::campaign::{
     Campaign, CampaignInfo, Control, ControllerOverride, Geometry, Record, TestKind, TestSpec,
 };
@@ -651,6 +652,7 @@ fn sample_campaign() -> Campaign {
     t1.amplitude_m = Some(0.05);
     Campaign {
         dir: PathBuf::new(),
+        sources: Default::default(),
         info: CampaignInfo {
             name: "round \"trip\" \\ test".to_string(),
             sample_rate_hz: FS,
@@ -674,6 +676,10 @@ fn round_trip_is_bit_exact() {
     let back = read_campaign(dir.path()).unwrap();
     assert_eq!(back.info, c.info);
     assert_eq!(back.records.len(), c.records.len());
+    // the project's own form: every channel read from the column of its name
+    let r1 = &back.sources["R1"];
+    assert_eq!(r1.of("force_n"), Some(&Source::same_column("force_n")));
+    assert_eq!(r1.channels.len(), back.records[0].channels().len());
     for (a, b) in back.records.iter().zip(&c.records) {
         // bit for bit, including -0.0 and subnormals
         let bits = |v: &[f64]| v.iter().map(|x| x.to_bits()).collect::<Vec<u64>>();

@@ -2,41 +2,20 @@
 //! damper (`tests/data/utfsm`, MIT licence): its DAQ's own text export, volts, 1000 Hz,
 //! displacement, force and reference only, no geometry and no controller gains.
 
-use shaketable::campaign::format::read_campaign;
+use shaketable::campaign::provenance::Source;
 use shaketable::campaign::{Measured, TestKind};
+use shaketable::identify::greybox::Role;
 use shaketable::identify::identify;
+use std::path::Path;
 
-const CAMPAIGN_TOML: &str = r#"
-name = "UTFSM MTS actuator with MR damper at 0 A (2022)"
-sample_rate_hz = 1000.0
+#[path = "common/utfsm.rs"]
+mod utfsm;
 
-[read]
-delimiter = ","
-header_line = 7
+use utfsm::{CHIRP_0A, RUN_15HZ_0A};
 
-[columns]
-ref_displacement_m = { column = "CHANNEL2", scale = 0.01 }
-displacement_m = { column = "CHANNEL0", scale = 0.01 }
-force_n = { column = "CHANNEL1", scale = 9806.65 }
-
-[[test]]
-name = "15Hz-0A"
-file = "validation_15Hz_0A.txt"
-kind = "record"
-control = "displacement"
-"#;
-
-/// The campaign folder: the committed recording and this campaign.toml.
+/// The 15-Hz run at 0 A with displacement, force and reference.
 fn campaign() -> (tempfile::TempDir, shaketable::campaign::Campaign) {
-    let tmp = tempfile::tempdir().unwrap();
-    let data = concat!(
-        env!("CARGO_MANIFEST_DIR"),
-        "/tests/data/utfsm/validation_15Hz_0A.txt"
-    );
-    std::fs::copy(data, tmp.path().join("validation_15Hz_0A.txt")).unwrap();
-    std::fs::write(tmp.path().join("campaign.toml"), CAMPAIGN_TOML).unwrap();
-    let c = read_campaign(tmp.path()).unwrap();
-    (tmp, c)
+    utfsm::campaign(&[("15Hz-0A", RUN_15HZ_0A)], true)
 }
 
 fn rms(x: &[f64]) -> f64 {
@@ -109,56 +88,16 @@ fn identification_says_what_it_cannot_tell_and_why() {
     );
     assert!(!keys.contains(&"controller.kp"), "{keys:?}");
     assert!(!id.missing.is_empty());
-    // the diagnosis needs the gains to simulate: a clear refusal, not a default
-    let e = shaketable::diagnose::diagnose(&c, None).unwrap_err();
-    assert!(e.contains("kp") && e.contains("[controller]"), "{e}");
 }
 
-/// The damper's campaign: chirp and 15 Hz random run at 0 A. The load cell reads the
-/// force on the damper with the sign of its push (the force does positive net work on
-/// the motion, as a dissipating device's must).
-const DEVICE_TOML: &str = r#"
-name = "UTFSM MR damper at 0 A: chirp and band-limited random"
-sample_rate_hz = 1000.0
-
-[read]
-delimiter = ","
-header_line = 7
-
-[columns]
-ref_displacement_m = { column = "CHANNEL2", scale = 0.01 }
-displacement_m = { column = "CHANNEL0", scale = 0.01 }
-force_n = { column = "CHANNEL1", scale = FORCE_SCALE }
-
-[[test]]
-name = "chirp-0A"
-file = "chirp_0A.txt"
-kind = "record"
-control = "displacement"
-
-[[test]]
-name = "15Hz-0A"
-file = "validation_15Hz_0A.txt"
-kind = "record"
-control = "displacement"
-"#;
-
-/// The damper's campaign with the force read at `scale` N/V.
-fn device_campaign(scale: f64) -> (tempfile::TempDir, shaketable::campaign::Campaign) {
-    let tmp = tempfile::tempdir().unwrap();
-    for f in ["chirp_0A.txt", "validation_15Hz_0A.txt"] {
-        let data = format!("{}/tests/data/utfsm/{f}", env!("CARGO_MANIFEST_DIR"));
-        std::fs::copy(data, tmp.path().join(f)).unwrap();
-    }
-    let toml = DEVICE_TOML.replace("FORCE_SCALE", &format!("{scale:.2}"));
-    std::fs::write(tmp.path().join("campaign.toml"), toml).unwrap();
-    let c = read_campaign(tmp.path()).unwrap();
-    (tmp, c)
+/// The damper's campaign at 0 A: the chirp and the 15-Hz random run, with the force.
+fn device_campaign() -> (tempfile::TempDir, shaketable::campaign::Campaign) {
+    utfsm::campaign(&[("chirp-0A", CHIRP_0A), ("15Hz-0A", RUN_15HZ_0A)], true)
 }
 
 #[test]
 fn the_damper_force_is_identified_on_the_chirp_and_checked_on_the_random_run() {
-    let (_tmp, c) = device_campaign(9806.65);
+    let (dir, c) = device_campaign();
     let id = identify(&c);
     let d = id
         .device
@@ -201,12 +140,12 @@ fn the_damper_force_is_identified_on_the_chirp_and_checked_on_the_random_run() {
         .is_some());
     assert_eq!(j["device"]["checked_on"][0]["test"], "15Hz-0A");
     closed_loop_predicts_the_random_run(&id);
+    what_was_read_is_shown(&id, dir.path());
 }
 
 /// The closed loop (reference to displacement) fitted on the chirp predicts the 15 Hz
 /// random run it never saw.
 fn closed_loop_predicts_the_random_run(id: &shaketable::identify::Identification) {
-    use shaketable::identify::greybox::Role;
     let cl = id
         .closed_loop
         .as_ref()
@@ -248,19 +187,6 @@ fn closed_loop_predicts_the_random_run(id: &shaketable::identify::Identification
 }
 
 #[test]
-fn the_damper_force_of_the_15hz_run_alone() {
-    let (_tmp, c) = campaign();
-    let id = identify(&c);
-    let d = id
-        .device
-        .as_ref()
-        .unwrap_or_else(|| panic!("{:?}", id.missing));
-    // measured: fit 85.0 % with F_mu 813 N, c 15 300 N s/m; nothing else to check on
-    assert!(d.fit.fit_percent > 83.0, "{}", d.fit.fit_percent);
-    assert!(d.validation.is_empty());
-}
-
-#[test]
 fn without_displacement_and_force_the_device_is_null_with_the_reason() {
     let (_tmp, mut c) = campaign();
     c.records[0].force_n = None;
@@ -274,5 +200,119 @@ fn without_displacement_and_force_the_device_is_null_with_the_reason() {
             .any(|m| m.contains("displacement_m and force_n")),
         "{:?}",
         id.missing
+    );
+}
+
+/// What was read, as identification, its JSON, the report and `campaign check` show it:
+/// every test's file, rate, samples and duration; every channel's SI unit and the lab's
+/// column and scale it came from, or how it was made.
+fn what_was_read_is_shown(id: &shaketable::identify::Identification, campaign: &Path) {
+    let read = &id.read;
+    // the preambles' sample counts, at the preambles' 1000 Hz
+    let files = [
+        ("chirp-0A", CHIRP_0A, 61_500),
+        ("15Hz-0A", RUN_15HZ_0A, 46_800),
+    ];
+    assert_eq!(read.tests.len(), files.len());
+    for (t, (name, file, samples)) in read.tests.iter().zip(files) {
+        assert_eq!((t.test.as_str(), t.file.as_str()), (name, file));
+        assert_eq!((t.samples, t.sample_rate_hz), (samples, 1000.0));
+        assert!(
+            (t.duration_s - samples as f64 / 1000.0).abs() < 1e-9,
+            "{t:?}"
+        );
+        let ch = |c: &str| {
+            t.channels
+                .iter()
+                .find(|x| x.channel == c)
+                .unwrap_or_else(|| panic!("{c} not read: {:?}", t.channels))
+        };
+        for (channel, unit, column, scale) in [
+            ("ref_displacement_m", "m", "CHANNEL2", 0.01),
+            ("displacement_m", "m", "CHANNEL0", 0.01),
+            ("force_n", "N", "CHANNEL1", 9806.65),
+        ] {
+            let c = ch(channel);
+            assert_eq!(c.unit, Some(unit), "{c:?}");
+            let column = column.to_string();
+            let offset = 0.0;
+            assert_eq!(
+                c.source,
+                Source::Column {
+                    column,
+                    scale,
+                    offset
+                }
+            );
+        }
+        // volts read as millimetres of stroke, in metres
+        let x = ch("displacement_m");
+        assert!(
+            x.min > -0.05 && x.max < 0.05 && x.max - x.min > 1e-3,
+            "{x:?}"
+        );
+        // made in reading: the time from the rate, the reference's derivatives
+        assert_eq!(
+            ch("time_s").source,
+            Source::SampleRate {
+                sample_rate_hz: 1000.0
+            }
+        );
+        let derivative = Source::Computed {
+            channel: "ref_displacement_m",
+            order: 1,
+        };
+        assert_eq!(ch("ref_velocity_m_s").source, derivative);
+        assert_eq!(ch("ref_velocity_m_s").unit, Some("m/s"));
+        // the DAQ's sample number kept as the file has it; its date and event note not read
+        assert_eq!(
+            (ch("Sample Number").unit, ch("Sample Number").max),
+            (None, samples as f64)
+        );
+        assert_eq!(t.unread_columns, ["Date/Time", "Events"]);
+        assert!(t.channels.iter().all(|c| c.channel != "acceleration_m_s2"));
+    }
+    for k in ["controller.kp", "actuator.piston_area_m2"] {
+        assert!(read.unknown_keys.contains(&k), "{:?}", read.unknown_keys);
+    }
+    let j = id.to_json();
+    let disp = &j["read"]["tests"][0]["channels"][4];
+    assert_eq!(disp["channel"], "displacement_m", "{j}");
+    assert_eq!(
+        (disp["source"]["column"].as_str(), disp["unit"].as_str()),
+        (Some("CHANNEL0"), Some("m"))
+    );
+    // the report shows it, with what was screened out and measured against simulated
+    let out = tempfile::tempdir().unwrap();
+    let rows = shaketable::report::identify::summary_rows(id, None);
+    shaketable::report::identify::write(out.path(), id, &rows, false).unwrap();
+    let html = std::fs::read_to_string(out.path().join("index.html")).unwrap();
+    for want in [
+        "What was read",
+        "<td>chirp_0A.txt</td>",
+        "<td>61500</td><td>61.500</td>",
+        "<td>46800</td><td>46.800</td>",
+        "<td>displacement_m</td><td>m</td>",
+        "0.01 x `CHANNEL0`",
+        "9806.65 x `CHANNEL1`",
+        "derivative of ref_displacement_m",
+        "Date/Time, Events",
+        "What was screened out",
+        "What could not be identified, and why",
+        "Measured against simulated",
+        "predicted (not fitted)",
+    ] {
+        assert!(html.contains(want), "{want} not in the report");
+    }
+    // `campaign check` prints the same table
+    let o = std::process::Command::new(env!("CARGO_BIN_EXE_shaketable"))
+        .args(["campaign", "check", campaign.to_str().unwrap()])
+        .output()
+        .unwrap();
+    let stdout = String::from_utf8_lossy(&o.stdout);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    assert!(
+        stdout.contains(&shaketable::report::read::text(read)),
+        "{stdout}"
     );
 }

@@ -8,6 +8,7 @@ pub mod files;
 pub mod format;
 pub mod init;
 pub mod matlab;
+pub mod provenance;
 pub mod screen;
 pub mod synth;
 
@@ -243,6 +244,20 @@ impl CampaignInfo {
     pub fn sample_rate_for(&self, spec: &TestSpec) -> f64 {
         spec.sample_rate_hz.unwrap_or(self.sample_rate_hz)
     }
+
+    /// Put the geometry and the campaign-wide gains campaign.toml gives into `p` (the
+    /// gains only when every one is given); returns the parameter-file keys nobody wrote
+    /// down (campaign-format.md: a missing key is *unknown*), which `p` keeps as they were.
+    pub fn apply_known(&self, p: &mut Params) -> Vec<&'static str> {
+        let mut unknown = self.geometry.apply_to(p);
+        match self.controller.complete() {
+            Ok(k) => p.controller = k,
+            Err(gains) => {
+                unknown.extend(gains.iter().map(|k| ControllerOverride::parameter_key(k)))
+            }
+        }
+        unknown
+    }
 }
 
 /// One recorded test: the channels of the CSV, SI units, uniform sampling.
@@ -308,6 +323,31 @@ impl Record {
         self.time_s.len()
     }
 
+    /// Every channel the record holds, by its campaign-format name, in the format's order
+    /// (time, the references, the measured channels, then the further channels).
+    pub fn channels(&self) -> Vec<(&str, &[f64])> {
+        let mut v: Vec<(&str, &[f64])> = vec![
+            ("time_s", &self.time_s),
+            ("ref_displacement_m", &self.ref_displacement_m),
+            ("ref_velocity_m_s", &self.ref_velocity_m_s),
+            ("ref_acceleration_m_s2", &self.ref_acceleration_m_s2),
+        ];
+        let measured = [
+            Measured::ValveCommand,
+            Measured::Spool,
+            Measured::Displacement,
+            Measured::Acceleration,
+            Measured::Force,
+        ];
+        v.extend(
+            measured
+                .into_iter()
+                .filter_map(|m| self.measured(m).map(|x| (m.name(), x))),
+        );
+        v.extend(self.extra.iter().map(|(n, x)| (n.as_str(), x.as_slice())));
+        v
+    }
+
     pub fn is_empty(&self) -> bool {
         self.time_s.is_empty()
     }
@@ -334,6 +374,9 @@ pub struct Campaign {
     pub dir: PathBuf,
     pub info: CampaignInfo,
     pub records: Vec<Record>,
+    /// How each test's file was read, by test name (column, scale and offset of every
+    /// channel; [`provenance`]); empty for a campaign made in memory (synthesised).
+    pub sources: provenance::SourcesByTest,
 }
 
 impl Campaign {

@@ -67,10 +67,11 @@ impl std::fmt::Display for Finding {
     }
 }
 
-/// The screened campaign (excluded tests removed, repaired samples replaced) and what
-/// was found.
+/// What was read (every test, before screening), the screened campaign (excluded tests
+/// removed, repaired samples replaced) and what was found.
 #[derive(Debug, Clone)]
 pub struct Screening {
+    pub read: super::provenance::CampaignRead,
     pub campaign: Campaign,
     pub findings: Vec<Finding>,
 }
@@ -95,6 +96,7 @@ pub fn screen(c: &Campaign) -> Screening {
         }
     }
     Screening {
+        read: c.what_was_read(),
         campaign: out,
         findings,
     }

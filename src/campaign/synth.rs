@@ -758,6 +758,8 @@ pub fn synthesise_program(
         .collect::<Result<Vec<Record>, SynthError>>()?;
     let names: Vec<&str> = program.iter().map(|(_, s)| s.name.as_str()).collect();
     Ok(Campaign {
+        // made in memory: no file read
+        sources: Default::default(),
         dir: PathBuf::new(),
         info: CampaignInfo {
             name: format!(

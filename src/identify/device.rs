@@ -399,6 +399,7 @@ mod tests {
             .collect();
         Campaign {
             dir: Default::default(),
+            sources: Default::default(),
             info: CampaignInfo {
                 name: "device".into(),
                 sample_rate_hz: fs,

@@ -41,7 +41,7 @@ pub use servovalve::{fit_servovalve, relative_error};
 pub use validation::validate;
 
 use crate::campaign::screen::{screen, Action, Screening};
-use crate::campaign::{Campaign, ControllerOverride, Record};
+use crate::campaign::{Campaign, Record};
 use crate::linear::OilColumn;
 use crate::params::{ActuatorModel, Params};
 use frf::WelchOptions;
@@ -171,13 +171,7 @@ pub fn identify_screened(s: &Screening) -> Identification {
     // start from the defaults with the lab's geometry and controller; `defaults` lists
     // what stays a default and why
     let mut p = Params::trees_lab();
-    let mut unknown_inputs = g.apply_to(&mut p);
-    match c.info.controller.complete() {
-        Ok(k) => p.controller = k,
-        Err(gains) => {
-            unknown_inputs.extend(gains.iter().map(|k| ControllerOverride::parameter_key(k)))
-        }
-    }
+    let unknown_inputs = c.info.apply_known(&mut p);
 
     let roles = select::random_roles(c);
     let name = |i: usize| c.info.tests[i].name.as_str();
@@ -325,6 +319,7 @@ pub fn identify_screened(s: &Screening) -> Identification {
     let welch = WelchOptions::for_resolution(welch_rate, RESOLUTION_HZ);
     Identification {
         campaign: c.info.name.clone(),
+        read: s.read.clone(),
         servovalve: valve,
         triangles,
         mass_random,
@@ -415,6 +410,7 @@ impl Identification {
             "servovalve": { "model": v.map(|v| v.chosen.name()).unwrap_or("unidentified") },
             "validation": { "test": val.map(|v| v.test.clone()) },
             "actuator": { "model": p.actuator.model.name() },
+            "read": self.read,
             "missing": self.missing,
             "screening": self.screening,
             "defaults": self.defaults().into_iter().map(|(k, r)| json!({"key": k, "reason": r})).collect::<Vec<_>>(),

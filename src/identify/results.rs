@@ -208,6 +208,8 @@ pub struct Validation {
 #[derive(Debug, Clone, Serialize)]
 pub struct Identification {
     pub campaign: String,
+    /// What was read: every test before screening, each channel's unit and source.
+    pub read: crate::campaign::provenance::CampaignRead,
     pub servovalve: Option<ServovalveFit>,
     pub triangles: Option<TriangleFit>,
     pub mass_random: Option<MassFit>,

@@ -3,13 +3,15 @@
 //! their uncertainty, what the data cannot separate, and measured against simulated per
 //! test and channel, predictions marked as such.
 
+use super::page::Section;
 use super::plot::{xy_png, Series};
-use crate::identify::greybox::{ClosedLoopFit, Role};
+use crate::identify::greybox::{ClosedLoopFit, Role, Trace};
 use std::fmt::Write as _;
 use std::path::Path;
 
-/// Most measured-against-simulated figures in a report: the validation tests first.
-const MAX_FIGURES: usize = 4;
+/// Most measured-against-simulated figures in a report: every test of a week's campaign
+/// gets its own (a dozen tests), more would bury the page; the table has them all.
+const MAX_FIGURES: usize = 12;
 
 /// `x` with its one-sigma, or "not determined".
 fn with_sigma(x: f64, sigma: Option<f64>) -> String {
@@ -87,67 +89,99 @@ pub fn text(cl: &ClosedLoopFit) -> String {
     t
 }
 
-/// The report's sections: the fit's text, then measured against simulated for the
-/// validation tests first. Each is `(title, figure, text)`.
-pub fn sections(
-    dir: &Path,
-    cl: &ClosedLoopFit,
-) -> Result<Vec<(String, String, String)>, super::ReportError> {
-    let mut traces: Vec<_> = cl.traces.iter().collect();
-    traces.sort_by_key(|t| t.role != Some(Role::Validation));
-    let mut out = Vec::new();
-    for (k, tr) in traces.into_iter().take(MAX_FIGURES).enumerate() {
-        let fig = format!("closed_loop_{k}.png");
-        let role = if tr.role == Some(Role::Validation) {
-            "predicted, not fitted"
-        } else {
-            "fitted"
-        };
-        let title = format!(
-            "{} {}: measured and simulated ({role})",
-            tr.test, tr.channel
-        );
-        xy_png(
-            &dir.join(&fig),
-            &title,
-            "time (s)",
-            tr.channel,
-            &[
-                Series {
-                    label: "measured",
-                    x: &tr.time_s,
-                    y: &tr.measured,
-                    points: false,
-                },
-                Series {
-                    label: "simulated",
-                    x: &tr.time_s,
-                    y: &tr.simulated,
-                    points: false,
-                },
-            ],
-        )?;
-        let fit = cl
-            .fits
-            .iter()
-            .find(|f| f.test == tr.test && f.channel == tr.channel)
-            .map(|f| {
-                format!(
-                    "NRMSE {:.4}, fit {:.2} % over the whole test (means removed).",
-                    f.nrmse, f.fit_percent
-                )
-            })
-            .unwrap_or_default();
-        let body = if k == 0 {
-            format!("{fit}\n\n{}", text(cl))
-        } else {
-            fit
-        };
-        out.push((
-            format!("Closed loop: {} {}", tr.test, tr.channel),
-            fig,
-            body,
+/// The report's sections: the fit's text, then measured against simulated: the first
+/// channel of every test (predictions first), then the other channels, up to
+/// [`MAX_FIGURES`] (the comparison table gives every test and channel).
+pub fn sections(dir: &Path, cl: &ClosedLoopFit) -> Result<Vec<Section>, super::ReportError> {
+    let mut out = vec![Section::tables(
+        "Closed loop (grey-box output error)",
+        text(cl),
+        Vec::new(),
+    )];
+    let order = figure_order(&cl.traces);
+    for (k, tr) in order.iter().take(MAX_FIGURES).enumerate() {
+        out.push(trace_section(dir, cl, tr, k)?);
+    }
+    if order.len() > MAX_FIGURES {
+        out.push(Section::tables(
+            "Closed loop: figures not drawn",
+            format!(
+                "{} more test channels are not drawn (at most {MAX_FIGURES} figures); their NRMSE \
+                 and fit % are in the measured-against-simulated table.",
+                order.len() - MAX_FIGURES
+            ),
+            Vec::new(),
         ));
     }
     Ok(out)
+}
+
+/// The traces in the order they are drawn: every test's first channel (validation tests
+/// first), then the remaining channels in the same order.
+fn figure_order(traces: &[Trace]) -> Vec<&Trace> {
+    let mut sorted: Vec<&Trace> = traces.iter().collect();
+    sorted.sort_by_key(|t| t.role != Some(Role::Validation));
+    let (mut firsts, mut rest): (Vec<&Trace>, Vec<&Trace>) = (Vec::new(), Vec::new());
+    for t in sorted {
+        match firsts.iter().any(|f| f.test == t.test) {
+            true => rest.push(t),
+            false => firsts.push(t),
+        }
+    }
+    firsts.into_iter().chain(rest).collect()
+}
+
+/// One measured-against-simulated figure (the `k`-th) with its fit figures.
+fn trace_section(
+    dir: &Path,
+    cl: &ClosedLoopFit,
+    tr: &Trace,
+    k: usize,
+) -> Result<Section, super::ReportError> {
+    let fig = format!("closed_loop_{k}.png");
+    let role = match tr.role == Some(Role::Validation) {
+        true => "predicted, not fitted",
+        false => "fitted",
+    };
+    let title = format!(
+        "{} {}: measured and simulated ({role})",
+        tr.test, tr.channel
+    );
+    xy_png(
+        &dir.join(&fig),
+        &title,
+        "time (s)",
+        tr.channel,
+        &[
+            Series {
+                label: "measured",
+                x: &tr.time_s,
+                y: &tr.measured,
+                points: false,
+            },
+            Series {
+                label: "simulated",
+                x: &tr.time_s,
+                y: &tr.simulated,
+                points: false,
+            },
+        ],
+    )?;
+    let fit = cl
+        .fits
+        .iter()
+        .find(|f| f.test == tr.test && f.channel == tr.channel)
+        .map(|f| {
+            format!(
+                "NRMSE {:.4}, fit {:.2} % over the whole test (means removed); the figure shows \
+                 ten seconds from just before the test moves.",
+                f.nrmse, f.fit_percent
+            )
+        })
+        .unwrap_or_default();
+    Ok(Section::figure(
+        format!("Closed loop: {} {}", tr.test, tr.channel),
+        fig,
+        fit,
+    ))
 }

@@ -2,10 +2,15 @@
 //! physics.
 
 pub mod closed_loop;
+mod device;
 pub mod diagnose;
 mod diagnose_causes;
 pub mod identify;
+pub mod page;
 pub mod plot;
+pub mod read;
+mod section4;
+mod summary;
 
 /// Why a report could not be written; every variant names the path.
 #[derive(Debug, thiserror::Error)]

@@ -204,15 +204,6 @@ fn check_synth_limits(a: &SynthArgs) -> anyhow::Result<()> {
     )
 }
 
-fn rms(x: &[f64]) -> f64 {
-    (x.iter().map(|v| v * v).sum::<f64>() / x.len().max(1) as f64).sqrt()
-}
-
-/// The RMS of a channel for the table, `absent` when the test did not record it.
-fn rms_cell(x: Option<&[f64]>) -> String {
-    x.map_or("absent".into(), |x| format!("{:.4e}", rms(x)))
-}
-
 /// The tests at a rate of their own (campaign-format.md, "campaign.toml additions"), as
 /// a note after the campaign's rate; empty when every test is at the campaign's.
 fn own_rates(info: &shaketable::campaign::CampaignInfo) -> String {
@@ -230,7 +221,6 @@ fn own_rates(info: &shaketable::campaign::CampaignInfo) -> String {
 }
 
 fn run_check(a: CheckArgs) -> anyhow::Result<()> {
-    use shaketable::campaign::ControllerOverride;
     let c = read_campaign(&a.dir).with_context(|| format!("campaign {}", a.dir.display()))?;
     println!(
         "{}: \"{}\", {} Hz{}",
@@ -239,63 +229,24 @@ fn run_check(a: CheckArgs) -> anyhow::Result<()> {
         c.info.sample_rate_hz,
         own_rates(&c.info)
     );
+    let screening = shaketable::campaign::screen::screen(&c);
+    let read = &screening.read;
+    print!("{}", shaketable::report::read::text(read));
+    let total: f64 = read.tests.iter().map(|t| t.duration_s).sum();
     println!(
-        "{:<6} {:<9} {:<13} {:>9} {:>12} {:>12} {:>12} {:>6}  extra",
-        "test", "kind", "control", "length_s", "rms_ref_m", "rms_disp_m", "rms_acc_m_s2", "spool"
+        "{} tests, {total:.3} s of table time: every rule of the format holds",
+        read.tests.len()
     );
-    let mut total = 0.0;
-    for (t, r) in c.info.tests.iter().zip(&c.records) {
-        let len = r.len() as f64 / c.sample_rate_for(t);
-        total += len;
-        println!(
-            "{:<6} {:<9} {:<13} {:>9.2} {:>12.4e} {:>12} {:>12} {:>6}  {}",
-            t.name,
-            format!("{:?}", t.kind).to_lowercase(),
-            format!("{:?}", t.control).to_lowercase(),
-            len,
-            rms(&r.ref_displacement_m),
-            rms_cell(r.displacement_m.as_deref()),
-            rms_cell(r.acceleration_m_s2.as_deref()),
-            if r.spool_position.is_some() {
-                "yes"
-            } else {
-                "no"
-            },
-            r.extra
-                .iter()
-                .map(|(n, _)| n.as_str())
-                .collect::<Vec<_>>()
-                .join(",")
-        );
-    }
-    println!(
-        "{} tests, {total} s of table time: every rule of the format holds",
-        c.records.len()
+    print!(
+        "{}",
+        shaketable::report::read::screening_text(&screening.findings)
     );
-    let findings = shaketable::campaign::screen::screen(&c).findings;
-    if findings.is_empty() {
-        println!("screening: no finding (finite, no spikes, no flat channel, signs consistent)");
-    }
-    for f in &findings {
-        println!("screening: {f}");
-    }
-    let mut p = shaketable::Params::trees_lab();
-    let mut unknown = c.info.geometry.apply_to(&mut p);
-    match c.info.controller.complete() {
-        Ok(k) => p.controller = k,
-        Err(gains) => unknown.extend(gains.iter().map(|g| ControllerOverride::parameter_key(g))),
-    }
-    if !unknown.is_empty() {
-        println!(
-            "unknown (not in campaign.toml): {}; identification estimates what the recordings \
-             allow and reports the rest as not identified",
-            unknown.join(", ")
-        );
-    }
     if let Err(e) = c.gains_known() {
         println!("not simulated: {e}");
         return Ok(());
     }
+    let mut p = shaketable::Params::trees_lab();
+    c.info.apply_known(&mut p);
     let tests: Vec<_> = c.info.tests.iter().cloned().enumerate().collect();
     warn_if_unstable(
         &p,

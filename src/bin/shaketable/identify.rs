@@ -60,13 +60,15 @@ pub fn run(args: Args) -> anyhow::Result<()> {
         args.campaign.display(),
         t0.elapsed().as_secs_f64()
     );
+    print!("{}", shaketable::report::read::text(&id.read));
     print!(
         "{}",
         shaketable::report::identify::text_table(&rows, truth.is_some())
     );
-    for f in &id.screening {
-        println!("screening: {f}");
-    }
+    print!(
+        "{}",
+        shaketable::report::read::screening_text(&id.screening)
+    );
     for m in &id.missing {
         println!("not identified: {m}");
     }

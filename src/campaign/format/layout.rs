@@ -7,6 +7,7 @@
 
 use super::csv::{check_time, CsvTable};
 use super::{CampaignError, REQUIRED_CHANNELS, SPOOL_CHANNEL};
+use crate::campaign::provenance::{ChannelSource, Source, Sources};
 use crate::campaign::{Control, Record};
 use realfft::num_complex::Complex;
 use realfft::RealFftPlanner;
@@ -146,6 +147,10 @@ impl ReadPlan {
 /// order (mapped channels, then unmapped project channels, then kept extras).
 struct Mapped {
     channels: Vec<(String, Vec<f64>)>,
+    /// Where each of `channels` came from.
+    sources: Vec<ChannelSource>,
+    /// The file's columns not read (text nobody mapped, a column shadowed by a mapping).
+    unread: Vec<String>,
 }
 
 impl Mapped {
@@ -167,6 +172,7 @@ fn csv_err(file: &str, line: usize, message: String) -> CampaignError {
 /// kept under their own names, unmapped text columns (a date, an event note) dropped.
 fn map_columns(t: &mut CsvTable, plan: &ReadPlan, file: &str) -> Result<Mapped, CampaignError> {
     let mut channels = Vec::new();
+    let mut sources = Vec::new();
     let mut used = vec![false; t.names.len()];
     for (channel, m) in &plan.columns {
         let Some(j) = t.index(&m.column) else {
@@ -193,33 +199,57 @@ fn map_columns(t: &mut CsvTable, plan: &ReadPlan, file: &str) -> Result<Mapped, 
             .map(|raw| m.scale * (raw - m.offset))
             .collect();
         channels.push((channel.clone(), values));
+        sources.push(ChannelSource {
+            channel: channel.clone(),
+            source: Source::Column {
+                column: m.column.clone(),
+                scale: m.scale,
+                offset: m.offset,
+            },
+        });
     }
+    let mut unread = Vec::new();
     for (j, was_used) in used.into_iter().enumerate() {
         let name = t.names[j].clone();
-        if was_used || channels.iter().any(|(c, _)| *c == name) {
+        if was_used {
+            continue;
+        }
+        if channels.iter().any(|(c, _)| *c == name) {
+            unread.push(name);
             continue;
         }
         let project = REQUIRED_CHANNELS.contains(&name.as_str()) || name == SPOOL_CHANNEL;
         match (&t.bad[j], project) {
             (Some((line, why)), true) => return Err(csv_err(file, *line, why.clone())),
-            (Some(_), false) => continue,
-            (None, _) => channels.push((name, std::mem::take(&mut t.columns[j]))),
+            (Some(_), false) => unread.push(name),
+            (None, _) => {
+                sources.push(ChannelSource {
+                    channel: name.clone(),
+                    source: Source::same_column(&name),
+                });
+                channels.push((name, std::mem::take(&mut t.columns[j])));
+            }
         }
     }
-    Ok(Mapped { channels })
+    Ok(Mapped {
+        channels,
+        sources,
+        unread,
+    })
 }
 
 /// The measured responses a lab-form test needs at least one of (campaign-format.md).
 const RESPONSES: [&str; 2] = ["displacement_m", "acceleration_m_s2"];
 
 /// A lab-form record: the table mapped, the time base checked or made from the rate, the
-/// reference derivatives computed from the recorded reference.
+/// reference derivatives computed from the recorded reference; and where each channel
+/// came from.
 pub(super) fn record_from_lab_table(
     mut t: CsvTable,
     plan: &ReadPlan,
     file: &str,
     rate_source: &str,
-) -> Result<Record, CampaignError> {
+) -> Result<(Record, Sources), CampaignError> {
     let mut m = map_columns(&mut t, plan, file)?;
     let fs = plan.sample_rate_hz;
     let n = t.row_lines.len();
@@ -249,7 +279,7 @@ pub(super) fn record_from_lab_table(
             ),
         ));
     }
-    Ok(Record {
+    let record = Record {
         time_s,
         ref_displacement_m: x,
         ref_velocity_m_s: v,
@@ -260,7 +290,40 @@ pub(super) fn record_from_lab_table(
         acceleration_m_s2,
         force_n,
         extra: m.channels,
-    })
+    };
+    let sources = sources_of(&record, m.sources, m.unread, plan);
+    Ok((record, sources))
+}
+
+/// Where each channel of `record` came from: a column (`read`), else made in reading
+/// (the time base from the rate, a reference computed from the recorded one).
+fn sources_of(
+    record: &Record,
+    read: Vec<ChannelSource>,
+    unread_columns: Vec<String>,
+    plan: &ReadPlan,
+) -> Sources {
+    let channels = record
+        .channels()
+        .into_iter()
+        .map(|(name, _)| {
+            let source = match read.iter().find(|c| c.channel == name) {
+                Some(c) => c.source.clone(),
+                None if name == "time_s" => Source::SampleRate {
+                    sample_rate_hz: plan.sample_rate_hz,
+                },
+                None => Source::computed_reference(plan.control, name),
+            };
+            ChannelSource {
+                channel: name.to_string(),
+                source,
+            }
+        })
+        .collect();
+    Sources {
+        channels,
+        unread_columns,
+    }
 }
 
 type Reference = (Vec<f64>, Vec<f64>, Vec<f64>);

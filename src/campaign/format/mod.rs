@@ -32,6 +32,7 @@ use super::files::{
     Refusal,
 };
 pub use super::files::{MAX_RECORD_BYTES, MAX_TOML_BYTES};
+use super::provenance::Sources;
 use super::{
     Campaign, CampaignInfo, Control, ControllerOverride, Geometry, Record, TestKind, TestSpec,
 };
@@ -244,15 +245,18 @@ pub fn read_record_str(
 }
 
 /// One test's text read under its [`ReadPlan`]: the project's form as
-/// [`read_record_str`], a laboratory's form mapped ([`layout`]).
+/// [`read_record_str`], a laboratory's form mapped ([`layout`]); with where each channel
+/// came from.
 pub fn read_record_planned(
     text: &str,
     file: &str,
     plan: &ReadPlan,
     rate_source: &str,
-) -> Result<Record, CampaignError> {
+) -> Result<(Record, Sources), CampaignError> {
     if !plan.lab_form {
-        return read_record_str(text, file, plan.sample_rate_hz, rate_source);
+        let r = read_record_str(text, file, plan.sample_rate_hz, rate_source)?;
+        let sources = Sources::same_columns(&r);
+        return Ok((r, sources));
     }
     let table = parse_csv(text, file, &plan.read, false)?;
     layout::record_from_lab_table(table, plan, file, rate_source)
@@ -265,7 +269,7 @@ fn read_test_file(
     shown: &str,
     plan: &ReadPlan,
     rate_source: &str,
-) -> Result<Record, CampaignError> {
+) -> Result<(Record, Sources), CampaignError> {
     let is_mat = real
         .extension()
         .is_some_and(|e| e.eq_ignore_ascii_case("mat"));
@@ -519,7 +523,7 @@ pub fn read_campaign(dir: &Path) -> Result<Campaign, CampaignError> {
     let (text, toml_file) = read_toml_text(&root, dir)?;
     let (info, file_lines, plans) = parse_campaign_toml_planned(&text, &toml_file, &dir_name(dir))?;
     let real = locate_test_files(&root, dir, &info, &file_lines, &plans, &toml_file)?;
-    let results: Vec<Result<Record, CampaignError>> = info
+    let results: Vec<Result<(Record, Sources), CampaignError>> = info
         .tests
         .par_iter()
         .zip(real.par_iter())
@@ -530,13 +534,17 @@ pub fn read_campaign(dir: &Path) -> Result<Campaign, CampaignError> {
         })
         .collect();
     let mut records = Vec::with_capacity(results.len());
-    for r in results {
-        records.push(r?);
+    let mut sources = super::provenance::SourcesByTest::new();
+    for (r, spec) in results.into_iter().zip(&info.tests) {
+        let (record, s) = r?;
+        records.push(record);
+        sources.insert(spec.name.clone(), s);
     }
     Ok(Campaign {
         dir: dir.to_path_buf(),
         info,
         records,
+        sources,
     })
 }
 
@@ -562,7 +570,7 @@ pub fn read_campaign_test(dir: &Path, name: &str) -> Result<(CampaignInfo, Recor
     let real = locate_test_files(&root, dir, &info, &file_lines, &plans, &toml_file)?;
     let shown = display(&dir.join(&info.tests[i].file));
     let source = rate_source(&plans[i], &toml_file, &info.tests[i]);
-    let record = read_test_file(&real[i], &shown, &plans[i], &source)?;
+    let (record, _) = read_test_file(&real[i], &shown, &plans[i], &source)?;
     Ok((info, record))
 }
 

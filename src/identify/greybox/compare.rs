@@ -52,7 +52,8 @@ const TRACE_S: f64 = 10.0;
 /// Most points of such a figure (the trace is decimated evenly beyond).
 const TRACE_POINTS: usize = 4000;
 
-/// Measured against simulated over the first [`TRACE_S`] of a test, means removed.
+/// Measured against simulated over [`TRACE_S`] of a test from just before it moves, means
+/// removed.
 #[derive(Debug, Clone, Default)]
 pub struct Trace {
     pub test: String,
@@ -63,6 +64,25 @@ pub struct Trace {
     pub simulated: Vec<f64>,
 }
 
+/// The figure starts this long before the measured channel first moves: a laboratory's
+/// record often begins with seconds at rest, which would fill the window.
+const TRACE_LEAD_S: f64 = 1.0;
+/// The channel has moved once it is this fraction of its RMS (mean removed) away from its
+/// first sample: far above a sensor's noise at rest, far below any test's motion.
+const MOTION_FRACTION: f64 = 0.1;
+
+/// The first sample of the figure: [`TRACE_LEAD_S`] before `meas` first moves.
+fn trace_start(meas: &[f64], fs: f64) -> usize {
+    let m = mean(meas);
+    let rms = (meas.iter().map(|v| (v - m).powi(2)).sum::<f64>() / meas.len().max(1) as f64).sqrt();
+    let first = meas.first().copied().unwrap_or(0.0);
+    let moved = meas
+        .iter()
+        .position(|v| (v - first).abs() > MOTION_FRACTION * rms)
+        .unwrap_or(0);
+    moved.saturating_sub((TRACE_LEAD_S * fs) as usize)
+}
+
 fn trace(
     test: &str,
     channel: &'static str,
@@ -71,10 +91,12 @@ fn trace(
     meas: &[f64],
     sim: &[f64],
 ) -> Trace {
-    let n = ((TRACE_S * fs) as usize).min(meas.len()).min(sim.len());
-    let stride = n.div_ceil(TRACE_POINTS).max(1);
+    let len = meas.len().min(sim.len());
+    let start = trace_start(&meas[..len], fs);
+    let end = (start + (TRACE_S * fs) as usize).min(len);
+    let stride = (end - start).div_ceil(TRACE_POINTS).max(1);
     let (mm, ms) = (mean(meas), mean(sim));
-    let idx: Vec<usize> = (0..n).step_by(stride).collect();
+    let idx: Vec<usize> = (start..end).step_by(stride).collect();
     Trace {
         test: test.to_string(),
         channel,
@@ -223,6 +245,23 @@ pub fn compare(
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn the_figure_starts_a_second_before_the_motion() {
+        let fs = 100.0;
+        // 3 s at rest (with a little noise), then a step and a sine
+        let x: Vec<f64> = (0..1000)
+            .map(|k| match k < 300 {
+                true => 1e-4 * ((k * 7919) % 13) as f64,
+                false => 1.0 + (2.0 * (k - 300) as f64 / fs).sin(),
+            })
+            .collect();
+        assert_eq!(trace_start(&x, fs), 200);
+        let t = trace("T", "displacement_m", Role::Validation, fs, &x, &x);
+        assert_eq!(t.time_s.first(), Some(&2.0));
+        // a record that moves from its start is drawn from its start
+        assert_eq!(trace_start(&x[300..], fs), 0);
+    }
 
     #[test]
     fn nrmse_is_zero_for_a_perfect_model_and_one_for_a_silent_one() {
