@@ -211,19 +211,9 @@ impl SynthOptions {
     }
 }
 
-fn spec(name: &str, kind: TestKind, control: Control) -> TestSpec {
-    TestSpec {
-        name: name.to_string(),
-        file: format!("{name}.csv"),
-        kind,
-        control,
-        rms: None,
-        band_hz: None,
-        frequency_hz: None,
-        amplitude_m: None,
-        controller: ControllerOverride::default(),
-        sample_rate_hz: None,
-    }
+/// The file a synthesised test `name` is written to.
+fn csv_file(name: &str) -> String {
+    format!("{name}.csv")
 }
 
 /// The paper's test program (campaign-format.md table; paper tables 4.1-4.3), in order
@@ -233,38 +223,37 @@ fn spec(name: &str, kind: TestKind, control: Control) -> TestSpec {
 pub fn paper_program(random_duration_s: f64) -> Vec<TestSpec> {
     let _ = random_duration_s;
     let mut p = Vec::with_capacity(18);
-    let mut r1 = spec("R1", TestKind::Random, Control::Displacement);
-    r1.rms = Some(0.005);
-    r1.band_hz = Some([0.0, 125.0]);
-    // A flat displacement spectrum to 125 Hz has r' ~ 2 m/s RMS: with the velocity
+    for (name, control, rms, band_hz) in [
+        ("R1", Control::Displacement, 0.005, [0.0, 125.0]),
+        ("R2", Control::Acceleration, 0.981, [0.5, 50.0]), // 0.1 g
+        ("R3", Control::Acceleration, 0.4905, [0.5, 125.0]), // 0.05 g
+    ] {
+        p.push(TestSpec::random(
+            name,
+            csv_file(name),
+            control,
+            rms,
+            band_hz,
+        ));
+    }
+    // R1: a flat displacement spectrum to 125 Hz has r' ~ 2 m/s RMS: with the velocity
     // feed-forward on, the valve would saturate.
-    r1.controller.fv = Some(0.0);
-    p.push(r1);
-    let mut r2 = spec("R2", TestKind::Random, Control::Acceleration);
-    r2.rms = Some(0.981); // 0.1 g
-    r2.band_hz = Some([0.5, 50.0]);
-    p.push(r2);
-    let mut r3 = spec("R3", TestKind::Random, Control::Acceleration);
-    r3.rms = Some(0.4905); // 0.05 g
-    r3.band_hz = Some([0.5, 125.0]);
-    p.push(r3);
+    p[0].controller.fv = Some(0.0);
     let mut i = 1;
     for a in [0.05, 0.10, 0.20] {
         for f in [0.05, 0.10, 0.5] {
-            let mut s = spec(&format!("S{i}"), TestKind::Sine, Control::Displacement);
-            s.frequency_hz = Some(f);
-            s.amplitude_m = Some(a);
-            p.push(s);
+            let name = format!("S{i}");
+            let file = csv_file(&name);
+            p.push(TestSpec::periodic(name, file, TestKind::Sine, f, a));
             i += 1;
         }
     }
     let mut i = 1;
     for a in [0.05, 0.10, 0.20] {
         for f in [0.05, 0.10] {
-            let mut s = spec(&format!("T{i}"), TestKind::Triangle, Control::Displacement);
-            s.frequency_hz = Some(f);
-            s.amplitude_m = Some(a);
-            p.push(s);
+            let name = format!("T{i}");
+            let file = csv_file(&name);
+            p.push(TestSpec::periodic(name, file, TestKind::Triangle, f, a));
             i += 1;
         }
     }

@@ -438,18 +438,7 @@ pub(super) fn read_test(
             ))
         }
     };
-    let mut spec = TestSpec {
-        name: name.clone(),
-        file: file.to_string(),
-        kind,
-        control,
-        rms: None,
-        band_hz: None,
-        frequency_hz: None,
-        amplitude_m: None,
-        controller: ControllerOverride::default(),
-        sample_rate_hz: None,
-    };
+    let mut spec = TestSpec::new(name.clone(), file, kind, control);
     let optional = |key: &str, check: Bound| -> Result<Option<f64>, CampaignError> {
         lookup(t, key)
             .map(|v| number(lines, v, tn, key, check))
