@@ -104,6 +104,7 @@ pub struct Frf {
 }
 
 impl ValveTf {
+    /// The servovalve of parameter set `p`.
     pub fn new(p: &Params) -> Self {
         let v = &p.servovalve;
         match v.model {
@@ -111,15 +112,25 @@ impl ValveTf {
                 gain: v.gain,
                 tau_s: v.time_constant_s,
             },
-            ServovalveModel::FirstOrder => ValveTf::FirstOrder {
-                gain: v.gain,
-                tau_s: v.time_constant_s,
-            },
-            ServovalveModel::SecondOrder => ValveTf::SecondOrder {
-                gain: v.gain,
-                omega_rad_s: 2.0 * PI * v.natural_frequency_hz,
-                damping_ratio: v.damping_ratio,
-            },
+            ServovalveModel::FirstOrder => ValveTf::first_order(v.gain, v.time_constant_s),
+            ServovalveModel::SecondOrder => {
+                ValveTf::second_order(v.gain, v.natural_frequency_hz, v.damping_ratio)
+            }
+        }
+    }
+
+    /// The first-order valve of paper eq. 4.1, `Ks / (1 + s tau)`.
+    pub fn first_order(gain: f64, tau_s: f64) -> Self {
+        ValveTf::FirstOrder { gain, tau_s }
+    }
+
+    /// The second-order valve of paper eq. 4.2, `Ks w^2 / (s^2 + 2 xi w s + w^2)`, with
+    /// `w = 2 pi natural_frequency_hz`.
+    pub fn second_order(gain: f64, natural_frequency_hz: f64, damping_ratio: f64) -> Self {
+        ValveTf::SecondOrder {
+            gain,
+            omega_rad_s: 2.0 * PI * natural_frequency_hz,
+            damping_ratio,
         }
     }
 
