@@ -627,18 +627,8 @@ fn sample_campaign() -> Campaign {
             vec![]
         },
     };
-    let spec = |name: &str, kind, control| TestSpec {
-        name: name.to_string(),
-        file: format!("{name}.csv"),
-        kind,
-        control,
-        rms: None,
-        band_hz: None,
-        frequency_hz: None,
-        amplitude_m: None,
-        controller: ControllerOverride::default(),
-        sample_rate_hz: None,
-    };
+    let spec =
+        |name: &str, kind, control| TestSpec::new(name, format!("{name}.csv"), kind, control);
     let mut r1 = spec("R1", TestKind::Random, Control::Displacement);
     r1.rms = Some(0.005);
     r1.band_hz = Some([0.0, 125.0]);

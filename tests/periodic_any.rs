@@ -4,23 +4,12 @@
 //! by the project's simulator at the default noise levels, several seeds.
 
 use shaketable::campaign::synth::{synthesise_program, SynthOptions};
-use shaketable::campaign::{Control, ControllerOverride, TestKind, TestSpec};
+use shaketable::campaign::{TestKind, TestSpec};
 use shaketable::identify::identify;
 use shaketable::Params;
 
 fn periodic(name: &str, kind: TestKind, frequency_hz: f64, amplitude_m: f64) -> TestSpec {
-    TestSpec {
-        name: name.to_string(),
-        file: format!("{name}.csv"),
-        kind,
-        control: Control::Displacement,
-        rms: None,
-        band_hz: None,
-        frequency_hz: Some(frequency_hz),
-        amplitude_m: Some(amplitude_m),
-        controller: ControllerOverride::default(),
-        sample_rate_hz: None,
-    }
+    TestSpec::periodic(name, format!("{name}.csv"), kind, frequency_hz, amplitude_m)
 }
 
 /// A lab's own periodic program: a slow sine (inertia about half the friction), a fast

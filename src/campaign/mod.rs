@@ -221,6 +221,67 @@ pub struct TestSpec {
     pub sample_rate_hz: Option<f64>,
 }
 
+impl TestSpec {
+    /// Test `name` of `kind` under `control`, read from `file`, with no level, band,
+    /// frequency, amplitude, gains or rate of its own (set those its kind needs).
+    pub fn new(
+        name: impl Into<String>,
+        file: impl Into<String>,
+        kind: TestKind,
+        control: Control,
+    ) -> TestSpec {
+        TestSpec {
+            name: name.into(),
+            file: file.into(),
+            kind,
+            control,
+            rms: None,
+            band_hz: None,
+            frequency_hz: None,
+            amplitude_m: None,
+            controller: ControllerOverride::default(),
+            sample_rate_hz: None,
+        }
+    }
+
+    /// A `record` test in displacement control (any recorded reference: it needs neither
+    /// a level nor a frequency).
+    pub fn record(name: impl Into<String>, file: impl Into<String>) -> TestSpec {
+        TestSpec::new(name, file, TestKind::Record, Control::Displacement)
+    }
+
+    /// A random test of RMS level `rms` (m or m/s^2 as `control` says) over `band_hz`.
+    pub fn random(
+        name: impl Into<String>,
+        file: impl Into<String>,
+        control: Control,
+        rms: f64,
+        band_hz: [f64; 2],
+    ) -> TestSpec {
+        TestSpec {
+            rms: Some(rms),
+            band_hz: Some(band_hz),
+            ..TestSpec::new(name, file, TestKind::Random, control)
+        }
+    }
+
+    /// A periodic test (`kind` [`TestKind::Sine`] or [`TestKind::Triangle`]) in
+    /// displacement control at `frequency_hz` with displacement amplitude `amplitude_m`.
+    pub fn periodic(
+        name: impl Into<String>,
+        file: impl Into<String>,
+        kind: TestKind,
+        frequency_hz: f64,
+        amplitude_m: f64,
+    ) -> TestSpec {
+        TestSpec {
+            frequency_hz: Some(frequency_hz),
+            amplitude_m: Some(amplitude_m),
+            ..TestSpec::new(name, file, kind, Control::Displacement)
+        }
+    }
+}
+
 fn is_default_override(o: &ControllerOverride) -> bool {
     *o == ControllerOverride::default()
 }

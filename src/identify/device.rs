@@ -380,22 +380,9 @@ mod tests {
 
     /// A campaign of `records` named T0, T1, ... at `fs`.
     fn campaign(records: Vec<Record>, fs: f64) -> Campaign {
-        use crate::campaign::{
-            CampaignInfo, Control, ControllerOverride, Geometry, TestKind, TestSpec,
-        };
+        use crate::campaign::{CampaignInfo, ControllerOverride, Geometry, TestSpec};
         let tests = (0..records.len())
-            .map(|i| TestSpec {
-                name: format!("T{i}"),
-                file: format!("T{i}.csv"),
-                kind: TestKind::Record,
-                control: Control::Displacement,
-                rms: None,
-                band_hz: None,
-                frequency_hz: None,
-                amplitude_m: None,
-                controller: ControllerOverride::default(),
-                sample_rate_hz: None,
-            })
+            .map(|i| TestSpec::record(format!("T{i}"), format!("T{i}.csv")))
             .collect();
         Campaign {
             dir: Default::default(),

@@ -11,6 +11,9 @@
 //! are R1, T1-T6, R2, S1/S2/S4/S5/S7/S8, S3/S6/S9, R3 and R2. Without a random test's
 //! mass, friction and mass come from the sines together ([`periodic`]). Apart: a device
 //! between actuator and reaction from any test with displacement and force ([`device`]).
+//! The device fit and the comparison of the identified model with every test are asked
+//! for ([`Scope::Complete`], the `identify` command); the diagnosis takes the parameters
+//! only ([`identify_screened`]).
 
 mod device;
 mod error;
@@ -123,10 +126,23 @@ fn check_moved(
     }
 }
 
+/// How much an identification computes beyond the model's parameters.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Scope {
+    /// The parameters and their estimates only, what the diagnosis needs: no device fit,
+    /// and no comparison of the model with every test unless the closed-loop fit made one.
+    Parameters,
+    /// Also the device force fit ([`Identification::device`]) and the identified model
+    /// simulated against every test ([`Identification::comparison`]): the `identify`
+    /// command and its report.
+    Complete,
+}
+
 /// Identify everything the campaign allows (paper section 4), in dependency order, after
-/// screening every record ([`crate::campaign::screen`]).
+/// screening every record ([`crate::campaign::screen`]), with the device fit and the
+/// comparison ([`Scope::Complete`]).
 pub fn identify(c: &Campaign) -> Identification {
-    identify_screened(&screen(c))
+    identify_screened_with(&screen(c), Scope::Complete)
 }
 
 /// Why no test can take a role (`role` says which and what it needs): none of that
@@ -156,8 +172,14 @@ fn in_file<T>(c: &Campaign, name: &str, r: Result<T, IdentifyError>) -> Result<T
     })
 }
 
-/// [`identify`] on an already screened campaign.
+/// The parameters ([`Scope::Parameters`]) of an already screened campaign: what the
+/// diagnosis builds its baseline on.
 pub fn identify_screened(s: &Screening) -> Identification {
+    identify_screened_with(s, Scope::Parameters)
+}
+
+/// [`identify`] on an already screened campaign, computing what `scope` asks for.
+pub fn identify_screened_with(s: &Screening, scope: Scope) -> Identification {
     let c = &s.campaign;
     // each test at its own rate (campaign-format.md, "campaign.toml additions")
     let fs = |i: usize| c.sample_rate_of(i);
@@ -288,15 +310,10 @@ pub fn identify_screened(s: &Screening) -> Identification {
             p.actuator.model = ActuatorModel::Nonlinear;
         }
     }
-    let device = match select::device_roles(c) {
-        Some(r) => in_file(c, name(r.fit), fit_device(c, &r)),
-        None => Err(absent_role(
-            s,
-            "device test (a test recording displacement_m and force_n)",
-            "device force not identified",
-        )),
+    let device = match scope {
+        Scope::Complete => device_fit(s).map_err(|e| note(Err(e))).ok(),
+        Scope::Parameters => None,
     };
-    let device = device.map_err(|e| note(Err(e))).ok();
     let known = greybox::Known {
         servovalve: valve.is_some(),
         mass: mass_kg.is_some(),
@@ -308,9 +325,10 @@ pub fn identify_screened(s: &Screening) -> Identification {
     if let Some(cl) = &closed_loop {
         p = cl.params;
     }
-    let comparison = match &closed_loop {
-        Some(cl) => cl.fits.clone(),
-        None => compare_all(c, &p),
+    let comparison = match (&closed_loop, scope) {
+        (Some(cl), _) => cl.fits.clone(),
+        (None, Scope::Complete) => compare_all(c, &p),
+        (None, Scope::Parameters) => Vec::new(),
     };
     // the segments of the random tests' spectra, at the rate of the first one used (a
     // test at another rate keeps the resolution, with segments of its own length)
@@ -336,6 +354,20 @@ pub fn identify_screened(s: &Screening) -> Identification {
         unknown_inputs,
         closed_loop,
         comparison,
+    }
+}
+
+/// The device force between actuator and reaction ([`device`]) from the first test
+/// recording displacement and force, or why there is none.
+fn device_fit(s: &Screening) -> Result<DeviceFit, IdentifyError> {
+    let c = &s.campaign;
+    match select::device_roles(c) {
+        Some(r) => in_file(c, &c.info.tests[r.fit].name, fit_device(c, &r)),
+        None => Err(absent_role(
+            s,
+            "device test (a test recording displacement_m and force_n)",
+            "device force not identified",
+        )),
     }
 }
 

@@ -217,7 +217,8 @@ pub struct Identification {
     pub mass_periodic: Option<PeriodicMassFit>,
     pub oil_column: Option<OilColumnFit>,
     pub validation: Option<Validation>,
-    /// The device force from a test with displacement and force.
+    /// The device force from a test with displacement and force (`None` as well when
+    /// not asked for, [`super::Scope::Parameters`]).
     pub device: Option<DeviceFit>,
     /// The final mass: inverse-variance mean of the random and periodic estimates, `None`
     /// when neither exists (the parameter file then keeps the default, marked as such).
@@ -237,6 +238,8 @@ pub struct Identification {
     /// The grey-box output-error fit of the closed loop, when the campaign left gains,
     /// geometry or section-4 estimates unknown (issue 16, part 3).
     pub closed_loop: Option<super::greybox::ClosedLoopFit>,
-    /// Per test and channel, the identified model's simulation against the measurement.
+    /// Per test and channel, the identified model's simulation against the measurement
+    /// (empty when not asked for, [`super::Scope::Parameters`], and no closed-loop fit
+    /// made one).
     pub comparison: Vec<super::greybox::ChannelFit>,
 }

@@ -9,6 +9,7 @@ use super::{
     VALVE_BAND_HZ,
 };
 use crate::campaign::{Measured, Record};
+use crate::linear::ValveTf;
 use crate::params::ServovalveModel;
 use num_complex::Complex64;
 use std::f64::consts::PI;
@@ -65,7 +66,10 @@ pub fn fit_servovalve(name: &str, rec: &Record, fs: f64) -> Result<ServovalveFit
     // eq. 4.1: Ks / (1 + s tau)
     let (t1, s1) = ([1.0, 0.01], [1.0, 0.01]);
     let first = minimise(
-        |p| Some(resid(&|s| p[0] / (1.0 + s * p[1]))),
+        |p| {
+            let valve = ValveTf::first_order(p[0], p[1]);
+            Some(resid(&|s| valve.response(s)))
+        },
         &t1,
         &[0.05, 1e-4],
         &[20.0, 1.0],
@@ -79,10 +83,8 @@ pub fn fit_servovalve(name: &str, rec: &Record, fs: f64) -> Result<ServovalveFit
     let t2 = [first.theta[0], 1.5 * w0 / (2.0 * PI), 1.0];
     let second = minimise(
         |p| {
-            let wn = 2.0 * PI * p[1];
-            Some(resid(&|s| {
-                p[0] * wn * wn / (s * s + 2.0 * p[2] * wn * s + wn * wn)
-            }))
+            let valve = ValveTf::second_order(p[0], p[1], p[2]);
+            Some(resid(&|s| valve.response(s)))
         },
         &t2,
         &[0.05, 0.5, 0.05],
@@ -114,13 +116,16 @@ pub fn fit_servovalve(name: &str, rec: &Record, fs: f64) -> Result<ServovalveFit
         FREQUENCY_BOUNDS_HZ,
     )?;
     check_bounds(name, "servovalve damping ratio", xi, DAMPING_BOUNDS)?;
-    let wn = 2.0 * PI * fv;
-    let first_err = err_of(&|s| k1 / (1.0 + s * tau));
-    let second_err = err_of(&|s| k2 * wn * wn / (s * s + 2.0 * xi * wn * s + wn * wn));
+    let (first_tf, second_tf) = (
+        ValveTf::first_order(k1, tau),
+        ValveTf::second_order(k2, fv, xi),
+    );
+    let first_err = err_of(&|s| first_tf.response(s));
+    let second_err = err_of(&|s| second_tf.response(s));
     let mut valid_to = f[0];
     for k in 0..f.len() {
         let s = Complex64::new(0.0, 2.0 * PI * f[k]);
-        let dp = ((k1 / (1.0 + s * tau)) / h[k]).arg().to_degrees().abs();
+        let dp = (first_tf.response(s) / h[k]).arg().to_degrees().abs();
         if dp > 5.0 {
             break;
         }

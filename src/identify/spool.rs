@@ -13,6 +13,7 @@ use super::lsq::{minimise, LsqOptions};
 use crate::campaign::Record;
 use crate::model::servovalve::SpoolDynamics;
 use crate::params::{Servovalve, ServovalveModel};
+use crate::solver::rk4_step;
 
 /// RK4 sub-steps per sample interval (the valve's ~20 Hz dynamics at 512 Hz need few).
 const SUBSTEPS: usize = 4;
@@ -49,10 +50,6 @@ pub fn spool_response(v: &Servovalve, u: &[f64], sample_rate_hz: f64) -> Vec<f64
             .collect();
     }
     let d = SpoolDynamics::new(v);
-    let f = |t: f64, s: [f64; 2]| -> [f64; 2] {
-        let (a, b) = d.derivatives(at(t), s[0], s[1]);
-        [a, b]
-    };
     let h = dt / SUBSTEPS as f64;
     let mut s = [0.0; 2];
     let mut out = Vec::with_capacity(n);
@@ -60,19 +57,10 @@ pub fn spool_response(v: &Servovalve, u: &[f64], sample_rate_hz: f64) -> Vec<f64
         out.push(s[0]);
         for i in 0..SUBSTEPS {
             let t = k as f64 * dt + i as f64 * h;
-            let k1 = f(t, s);
-            let k2 = f(
-                t + 0.5 * h,
-                [s[0] + 0.5 * h * k1[0], s[1] + 0.5 * h * k1[1]],
-            );
-            let k3 = f(
-                t + 0.5 * h,
-                [s[0] + 0.5 * h * k2[0], s[1] + 0.5 * h * k2[1]],
-            );
-            let k4 = f(t + h, [s[0] + h * k3[0], s[1] + h * k3[1]]);
-            for j in 0..2 {
-                s[j] += h / 6.0 * (k1[j] + 2.0 * k2[j] + 2.0 * k3[j] + k4[j]);
-            }
+            rk4_step(&mut s, h, |stage, x, dx| {
+                let (a, b) = d.derivatives(at(stage.time_s(t, h)), x[0], x[1]);
+                *dx = [a, b];
+            });
         }
     }
     out

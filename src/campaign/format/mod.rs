@@ -212,7 +212,10 @@ fn refusal(file: &str, r: Refusal) -> CampaignError {
 mod csv;
 pub mod layout;
 mod toml_file;
+mod toml_gains;
 mod toml_layout;
+mod toml_test;
+mod toml_values;
 mod write;
 
 use csv::*;

@@ -4,7 +4,7 @@
 //! `scal = 0.01` would silently read volts as metres.
 
 use super::layout::{ColumnEntry, Delimiter, ReadOverride};
-use super::toml_file::{as_number, type_name, Lines};
+use super::toml_values::{as_number, type_name, Lines};
 use super::CampaignError;
 use std::collections::BTreeMap;
 

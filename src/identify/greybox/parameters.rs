@@ -14,9 +14,6 @@ pub enum GreyParameter {
     FlowGain,
     /// Velocity feed-forward Fv, s/m.
     VelocityFeedForward,
-    /// Delta-P (force) stabilisation Kdp, 1/N: it damps the oil column through the valve,
-    /// as the leakage does directly; the valve's lag tells them apart.
-    DeltaPGain,
     /// First-order servovalve time constant, s (paper eq. 4.1).
     ValveTimeConstant,
     /// Effective bulk modulus, Pa: with the geometry and mass, the oil-column frequency.
@@ -35,11 +32,10 @@ use GreyParameter::*;
 
 impl GreyParameter {
     /// Every parameter a closed-loop fit may free.
-    pub const ALL: [GreyParameter; 10] = [
+    pub const ALL: [GreyParameter; 9] = [
         DisplacementGain,
         FlowGain,
         VelocityFeedForward,
-        DeltaPGain,
         ValveTimeConstant,
         BulkModulus,
         Leakage,
@@ -71,7 +67,6 @@ impl GreyParameter {
             DisplacementGain => "controller.kp",
             FlowGain => "actuator.flow_gain_m3_s",
             VelocityFeedForward => "controller.fv",
-            DeltaPGain => "controller.kdp",
             ValveTimeConstant => "servovalve.time_constant_s",
             BulkModulus => "actuator.bulk_modulus_pa",
             Leakage => "actuator.leakage_m3_s_pa",
@@ -86,7 +81,6 @@ impl GreyParameter {
             DisplacementGain => p.controller.kp,
             FlowGain => p.actuator.flow_gain_m3_s,
             VelocityFeedForward => p.controller.fv,
-            DeltaPGain => p.controller.kdp,
             ValveTimeConstant => p.servovalve.time_constant_s,
             BulkModulus => p.actuator.bulk_modulus_pa,
             Leakage => p.actuator.leakage_m3_s_pa,
@@ -101,7 +95,6 @@ impl GreyParameter {
             DisplacementGain => &mut p.controller.kp,
             FlowGain => &mut p.actuator.flow_gain_m3_s,
             VelocityFeedForward => &mut p.controller.fv,
-            DeltaPGain => &mut p.controller.kdp,
             ValveTimeConstant => &mut p.servovalve.time_constant_s,
             BulkModulus => &mut p.actuator.bulk_modulus_pa,
             Leakage => &mut p.actuator.leakage_m3_s_pa,
@@ -115,7 +108,7 @@ impl GreyParameter {
     /// Searched in logarithm: the positive scale parameters, whose plausible values span
     /// decades. The feed-forward and the friction may be zero and are searched linearly.
     pub fn logarithmic(self) -> bool {
-        !matches!(self, VelocityFeedForward | DeltaPGain | FrictionForce)
+        !matches!(self, VelocityFeedForward | FrictionForce)
     }
 
     /// Physical search bounds, given the rest of `p` (the feed-forward's and friction's
@@ -130,8 +123,6 @@ impl GreyParameter {
                 0.0,
                 2.0 * a.piston_area_m2 / (a.flow_gain_m3_s * p.servovalve.gain),
             ],
-            // as much damping through the valve as the largest leakage searched
-            DeltaPGain => [0.0, LEAKAGE_CEILING_M3_S_PA / flow_per_force(p)],
             ValveTimeConstant => VALVE_TIME_CONSTANT_S,
             BulkModulus => [1e7, 2e11],
             Leakage => [LEAKAGE_FLOOR_M3_S_PA, LEAKAGE_CEILING_M3_S_PA],
@@ -149,8 +140,6 @@ impl GreyParameter {
         match self {
             VelocityFeedForward => self.bounds(p)[1] / 2.0,
             FrictionForce => self.get(p).abs().max(1.0),
-            // the gain whose flow per unit load pressure equals the leakage's
-            DeltaPGain => (p.actuator.leakage_m3_s_pa / flow_per_force(p)).max(f64::MIN_POSITIVE),
             _ => 1.0,
         }
     }
@@ -172,13 +161,6 @@ impl GreyParameter {
             theta
         }
     }
-}
-
-/// Flow per unit load pressure and unit Kdp at low frequency, `Ks Kq A` (spec sections 2-4:
-/// `Kdp F_A = Kdp A P_L` commands the valve, whose flow is `Ks Kq` per unit command).
-fn flow_per_force(p: &Params) -> f64 {
-    (p.servovalve.gain * p.actuator.flow_gain_m3_s * p.actuator.piston_area_m2)
-        .max(f64::MIN_POSITIVE)
 }
 
 /// `p` with the free parameters set from search coordinates `theta`.

@@ -1,0 +1,213 @@
+//! Simulating tests: one test's reference, seeded in-loop noise, simulation and record;
+//! any program in parallel; the paper's program.
+
+use super::*;
+use crate::campaign::{Campaign, CampaignInfo, ControllerOverride, Geometry, Record, TestSpec};
+use crate::model::{Model, Outputs, SensorNoise};
+use crate::params::Params;
+use crate::solver::simulate_run;
+use rand::SeedableRng;
+use rand_chacha::ChaCha8Rng;
+use rand_distr::{Distribution, Normal};
+use rayon::prelude::*;
+use std::path::PathBuf;
+use std::sync::atomic::{AtomicU64, Ordering};
+
+/// One synthesised test with what the file does not hold: the noise-free readings and
+/// the noise samples (for tests of the synthesis itself; identification sees `record`).
+#[derive(Debug, Clone)]
+pub struct SynthTest {
+    pub record: Record,
+    /// Noise-free readings at every sample (`valve_command` is the one actually sent).
+    pub truth: Vec<Outputs>,
+    /// Feedback noise at every sample (inside the loop).
+    pub noise: Vec<SensorNoise>,
+    /// Spool measurement noise at every sample (not fed back).
+    pub spool_noise: Vec<f64>,
+}
+
+/// Synthesise one test: reference, seeded in-loop noise, simulation, record.
+/// `index` is the test's index in its program (it selects the random streams).
+pub fn synthesise_test(
+    params: &Params,
+    spec: &TestSpec,
+    index: usize,
+    opts: &SynthOptions,
+    sample_rate_hz: f64,
+) -> Result<SynthTest, SynthError> {
+    let fs = sample_rate_hz;
+    let r = reference(spec, index, opts.seed, opts.random_duration_s, fs)?;
+    let n = r.len();
+    let inputs = r.inputs();
+    // sensor noise: white, seeded per test, drawn in a fixed order per sample
+    let mut rng = ChaCha8Rng::seed_from_u64(opts.seed);
+    rng.set_stream(2 * index as u64 + 1);
+    let normal = Normal::new(0.0, 1.0).expect("unit normal");
+    let nl = opts.noise;
+    let mut noise = Vec::with_capacity(n);
+    let mut spool_noise = Vec::with_capacity(n);
+    for _ in 0..n {
+        spool_noise.push(nl.spool * normal.sample(&mut rng));
+        noise.push(SensorNoise {
+            displacement_m: nl.displacement_m * normal.sample(&mut rng),
+            acceleration_m_s2: nl.acceleration_m_s2 * normal.sample(&mut rng),
+            force_n: nl.force_n * normal.sample(&mut rng),
+        });
+    }
+    let mut p = *params;
+    p.controller = spec.controller.apply(&params.controller);
+    let model = Model::new(&p);
+    let noise_arg = if nl.is_none() { None } else { Some(&noise[..]) };
+    let run = simulate_run(&model, &inputs, fs, noise_arg, opts.max_substep_s);
+    if let Some(stop) = run.stop {
+        return Err(SynthError::BadTest {
+            name: spec.name.clone(),
+            message: stop.reason,
+        });
+    }
+    let truth = run.outputs;
+    let rec = Record {
+        time_s: (0..n).map(|k| k as f64 / fs).collect(),
+        ref_displacement_m: r.displacement_m,
+        ref_velocity_m_s: r.velocity_m_s,
+        ref_acceleration_m_s2: r.acceleration_m_s2,
+        // the controller's own digital signal: no added noise
+        valve_command: Some(truth.iter().map(|o| o.valve_command).collect()),
+        // measured channels: the true reading plus the very noise the controller saw
+        spool_position: Some(
+            truth
+                .iter()
+                .zip(&spool_noise)
+                .map(|(o, e)| o.spool_position + e)
+                .collect(),
+        ),
+        displacement_m: Some(
+            truth
+                .iter()
+                .zip(&noise)
+                .map(|(o, e)| o.displacement_m + e.displacement_m)
+                .collect(),
+        ),
+        acceleration_m_s2: Some(
+            truth
+                .iter()
+                .zip(&noise)
+                .map(|(o, e)| o.acceleration_m_s2 + e.acceleration_m_s2)
+                .collect(),
+        ),
+        force_n: Some(
+            truth
+                .iter()
+                .zip(&noise)
+                .map(|(o, e)| o.actuator_force_n + e.force_n)
+                .collect(),
+        ),
+        // Extra channels for users (plots, checks): noise-free truths. Identification
+        // and diagnosis do not use them.
+        extra: vec![
+            (
+                "velocity_m_s".to_string(),
+                truth.iter().map(|o| o.velocity_m_s).collect(),
+            ),
+            (
+                "pressure_a_pa".to_string(),
+                truth.iter().map(|o| o.pressure_a_pa).collect(),
+            ),
+            (
+                "pressure_b_pa".to_string(),
+                truth.iter().map(|o| o.pressure_b_pa).collect(),
+            ),
+        ],
+    };
+    Ok(SynthTest {
+        record: rec,
+        truth,
+        noise,
+        spool_noise,
+    })
+}
+
+/// Progress callback: `(samples done, samples in total)`, called from worker threads
+/// after each test.
+pub type Progress<'a> = &'a (dyn Fn(u64, u64) + Sync);
+
+/// Synthesise any list of tests (`(index, spec)`: index selects the random streams) in
+/// parallel, each at its own `sample_rate_hz` if it has one, else at [`SAMPLE_RATE_HZ`]
+/// (the campaign's rate). The campaign's `[controller]` and geometry come from `params`.
+pub fn synthesise_program(
+    params: &Params,
+    program: &[(usize, TestSpec)],
+    opts: &SynthOptions,
+    progress: Option<Progress>,
+) -> Result<Campaign, SynthError> {
+    let fs = SAMPLE_RATE_HZ;
+    let rate = |s: &TestSpec| s.sample_rate_hz.unwrap_or(fs);
+    for (_, s) in program {
+        check_spec(s, opts.random_duration_s, rate(s))?;
+    }
+    let total: u64 = program
+        .iter()
+        .map(|(_, s)| test_samples(s, opts.random_duration_s, rate(s)) as u64)
+        .sum();
+    let done = AtomicU64::new(0);
+    let records = program
+        .par_iter()
+        .map(|(i, s)| {
+            let t = synthesise_test(params, s, *i, opts, rate(s))?;
+            let d =
+                done.fetch_add(t.record.len() as u64, Ordering::Relaxed) + t.record.len() as u64;
+            if let Some(cb) = progress {
+                cb(d, total);
+            }
+            Ok(t.record)
+        })
+        .collect::<Result<Vec<Record>, SynthError>>()?;
+    let names: Vec<&str> = program.iter().map(|(_, s)| s.name.as_str()).collect();
+    Ok(Campaign {
+        // made in memory: no file read
+        sources: Default::default(),
+        dir: PathBuf::new(),
+        info: CampaignInfo {
+            name: format!(
+                "Synthetic campaign ({}; seed {})",
+                if names.len() == 18 && opts.tests.is_none() {
+                    "paper program".to_string()
+                } else {
+                    names.join(" ")
+                },
+                opts.seed
+            ),
+            sample_rate_hz: fs,
+            geometry: Geometry::from_params(params),
+            controller: ControllerOverride::known(&params.controller),
+            tests: program.iter().map(|(_, s)| s.clone()).collect(),
+        },
+        records,
+    })
+}
+
+/// The paper's program (or the subset `opts.tests`) with `(index, spec)` pairs.
+pub fn selected_program(opts: &SynthOptions) -> Vec<(usize, TestSpec)> {
+    paper_program(opts.random_duration_s)
+        .into_iter()
+        .enumerate()
+        .filter(|(_, s)| match &opts.tests {
+            Some(names) => names.iter().any(|n| n == &s.name),
+            None => true,
+        })
+        .collect()
+}
+
+/// Synthesise the paper's test program (or the subset `opts.tests`) in memory
+/// (`dir` is empty; [`write_synthetic`] or [`synthesise_to_dir`] put it on disk).
+///
+/// # Panics
+/// If `opts.validate()` fails (the command line validates first); use
+/// [`synthesise_program`] for a `Result`. `params` must be valid.
+pub fn synthesise(params: &Params, opts: &SynthOptions, progress: Option<Progress>) -> Campaign {
+    if let Err(e) = opts.validate() {
+        panic!("invalid synthesis options: {e}");
+    }
+    synthesise_program(params, &selected_program(opts), opts, progress)
+        .unwrap_or_else(|e| panic!("paper program: {e}"))
+}
