@@ -5,11 +5,7 @@ use super::*;
 use crate::fmi::variables::{by_vr, integer_allowed, Variable};
 
 impl Instance {
-    fn variable(
-        function: &'static str,
-        vr: u32,
-        kind: Kind,
-    ) -> Result<&'static Variable> {
+    fn variable(function: &'static str, vr: u32, kind: Kind) -> Result<&'static Variable> {
         match by_vr(vr) {
             Some(v) if v.kind == kind => Ok(v),
             Some(v) => err(
