@@ -539,3 +539,28 @@ impl Identification {
         OilColumn::of(&self.params)
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::campaign::synth::{synthesise, SynthOptions};
+
+    /// The diagnosis's identification ([`Scope::Parameters`]) identifies the same model as
+    /// the complete one and leaves out the device fit, which only the latter attempts.
+    #[test]
+    fn the_parameters_scope_identifies_the_same_model_without_the_device() {
+        let opts = SynthOptions {
+            random_duration_s: 12.0,
+            tests: Some(vec!["R2".into()]),
+            ..SynthOptions::default()
+        };
+        let screened = screen(&synthesise(&Params::trees_lab(), &opts, None));
+        let complete = identify_screened_with(&screened, Scope::Complete);
+        let parameters = identify_screened(&screened);
+        assert_eq!(parameters.params, complete.params);
+        assert!(parameters.device.is_none());
+        let device_noted = |id: &Identification| id.missing.iter().any(|m| m.contains("device"));
+        assert!(complete.device.is_some() || device_noted(&complete));
+        assert!(!device_noted(&parameters), "{:?}", parameters.missing);
+    }
+}
