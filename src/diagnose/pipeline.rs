@@ -442,19 +442,6 @@ fn verdict(best: &Candidate, current_score: f64, table_mass_kg: f64) -> Verdict 
     }
 }
 
-/// The effects a search after the first fits again: those whose first candidate improved
-/// on the baseline's selection score (`baseline_score`, on the cells the baseline misses).
-/// A second effect's cells are missed by the baseline too, so its candidate already
-/// helps there with the first effect still missing; an effect that could not improve on
-/// the baseline at all is not fitted again (each fit costs seconds to a minute).
-fn worth_searching_again(first: &[Candidate], baseline_score: f64) -> Vec<Effect> {
-    first
-        .iter()
-        .filter(|c| c.score < baseline_score)
-        .map(|c| c.effect)
-        .collect()
-}
-
 /// Diagnose the screened campaign `c` from its baseline identification `id`.
 pub(super) fn diagnose_with(
     c: &Campaign,
@@ -527,9 +514,12 @@ pub(super) fn diagnose_with(
         };
         let best = candidates[k].clone();
         if round == 0 {
-            searched = worth_searching_again(&candidates, baseline_score);
             first_candidates = candidates;
         }
+        // every effect not yet accepted is fitted again: a second effect's first candidate
+        // may not beat the baseline at all while the dominant effect is missing (a
+        // specimen's fit with a deadband unmodelled ends at its damping bound; stick-slip's
+        // with a specimen unmodelled does not improve the baseline)
         searched.retain(|&e| e != best.effect);
         let current_score = missed.rms(&current.select.score);
         match verdict(&best, current_score, base.table.mass_kg) {

@@ -78,27 +78,6 @@ fn the_best_candidate_is_the_best_that_is_evidence() {
     assert_eq!(best_candidate(&[], 4e4), None);
 }
 
-/// A later search fits again only the effects whose first candidate beat the baseline.
-#[test]
-fn only_effects_that_helped_once_are_searched_again() {
-    let scored = |e: Effect, score: f64| {
-        let mut c = Candidate::empty(e);
-        c.score = score;
-        c
-    };
-    let first = [
-        scored(Effect::Specimen, 2.0),
-        scored(Effect::FreePlay, 5.0),
-        scored(Effect::FlowSaturation, f64::INFINITY),
-        scored(Effect::FrictionAsymmetry, NAN),
-        scored(Effect::StickSlip, 4.9),
-    ];
-    assert_eq!(
-        worth_searching_again(&first, 5.0),
-        [Effect::Specimen, Effect::StickSlip]
-    );
-}
-
 /// A cause needs the gain on the selection quarter, physics and evidence; a candidate
 /// with the gain but no evidence is partial.
 #[test]
