@@ -476,7 +476,7 @@ fn run_observed(
 }
 
 /// What [`simulate_record`] writes for the samples after a divergence.
-const DIVERGED: Outputs = Outputs {
+pub const DIVERGED: Outputs = Outputs {
     valve_command: f64::NAN,
     spool_position: f64::NAN,
     displacement_m: f64::NAN,

@@ -8,7 +8,7 @@ use super::effect::Effect;
 use super::evidence::not_evidence;
 use super::output::{Candidate, PartRows};
 use super::part::Part;
-use super::residuals::{CellScores, NoiseFloor, Whitening};
+use super::residuals::{CellScores, Cells, NoiseFloor, Whitening};
 use super::starts::{indices, informed_start, starts};
 use super::stick_slip::fit_stick_slip;
 use super::{residuals, trace_enabled};
@@ -281,8 +281,8 @@ impl Candidate {
     /// report residual over the cells `report_mask` keeps (the baseline's missed ones).
     pub(super) fn summarise(
         &mut self,
-        select_mask: &dyn Fn(&[[f64; 5]]) -> f64,
-        report_mask: &dyn Fn(&[[f64; 5]]) -> f64,
+        select_mask: &dyn Fn(&[Cells]) -> f64,
+        report_mask: &dyn Fn(&[Cells]) -> f64,
     ) {
         self.select_residual = select_mask(&self.select.residual);
         self.score = select_mask(&self.select.score) * (1.0 + 0.01 * self.parameters.len() as f64);

@@ -1,7 +1,7 @@
 //! The catalogue effects diagnosis fits (spec section 7): names, parameters, where
 //! their signature lives, how they are read from and applied to parameters, fitting bounds.
 
-use super::residuals::{measured, CHANNELS};
+use super::residuals::Channel;
 use crate::campaign::Campaign;
 use crate::params::Params;
 use serde::Serialize;
@@ -60,10 +60,8 @@ impl Effect {
     /// `Err` names the alternatives when it does not (the effect is not testable).
     pub(super) fn testable(self, c: &Campaign) -> Result<(), String> {
         let recorded = |name: &str| {
-            CHANNELS
-                .iter()
-                .position(|&ch| ch == name)
-                .is_some_and(|ch| c.records.iter().any(|r| measured(r, ch).is_some()))
+            Channel::named(name)
+                .is_some_and(|ch| c.records.iter().any(|r| ch.measured(r).is_some()))
         };
         let alternatives = self.catalogue().signature_channels;
         if alternatives

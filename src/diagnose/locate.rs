@@ -5,7 +5,7 @@
 
 use super::output::{PartRows, UnexplainedCell};
 use super::part::Part;
-use super::residuals::{channel_bands, measured, predict, simulated, NoiseFloor, CHANNELS};
+use super::residuals::{channel_bands, padded, predict, Channel, NoiseFloor, PerChannel};
 use super::EXPLAINED_RATIO;
 use crate::campaign::Campaign;
 use crate::params::Params;
@@ -45,18 +45,19 @@ pub(super) fn unexplained_cells(
     p: &Params,
     c: &Campaign,
     rows: &PartRows,
-    baseline_missed: &[[bool; 5]],
+    baseline_missed: &[PerChannel<bool>],
     noise: &NoiseFloor,
 ) -> Vec<UnexplainedCell> {
-    let mut worst: Vec<(usize, usize, f64)> = rows
+    let mut worst: Vec<(usize, Channel, f64)> = rows
         .residual
         .iter()
         .zip(baseline_missed)
         .enumerate()
         .flat_map(|(i, (r, m))| {
-            (0..CHANNELS.len())
-                .filter(move |&ch| m[ch] && !(r[ch] <= EXPLAINED_RATIO))
-                .map(move |ch| (i, ch, r[ch]))
+            r.iter().filter_map(move |(ch, x)| {
+                let x = (*x)?;
+                (m[ch] && !(x <= EXPLAINED_RATIO)).then_some((i, ch, x))
+            })
         })
         .collect();
     worst.sort_by(|a, b| b.2.total_cmp(&a.2));
@@ -72,7 +73,7 @@ fn locate(
     p: &Params,
     c: &Campaign,
     i: usize,
-    ch: usize,
+    ch: Channel,
     residual: f64,
     noise: &NoiseFloor,
 ) -> Option<UnexplainedCell> {
@@ -86,12 +87,14 @@ fn locate(
         None => ([0.0, c.sample_rate_of(i) / 2.0], f64::INFINITY),
     };
     let range = Part::Report.range(r.len());
-    let m = measured(r, ch)?;
-    let s = noise.of(ch);
-    let run = &pred.locked[range.clone()];
+    let m = ch.measured(r)?;
+    let s = noise.of(ch)?;
+    // every sample, NaN from a stop on (the figures are read sample by sample)
+    let locked = padded(&pred.locked);
+    let run = &locked[range.clone()];
     let residual_units: Vec<f64> = range
         .clone()
-        .map(|k| (m[k] - simulated(&pred.locked[k], ch)) / s)
+        .map(|k| (m[k] - ch.simulated(&locked[k])) / s)
         .collect();
     let depends_on = Dependence {
         moving_positive: split(&residual_units, run, |o| o.velocity_m_s > 0.0),
@@ -102,7 +105,7 @@ fn locate(
     };
     Some(UnexplainedCell {
         test: c.info.tests[i].name.clone(),
-        channel: CHANNELS[ch].to_string(),
+        channel: ch.name().to_string(),
         band_hz,
         residual,
         band_residual,

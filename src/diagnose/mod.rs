@@ -36,6 +36,7 @@ mod direction_starts;
 mod effect;
 mod evidence;
 mod locate;
+mod missed;
 mod output;
 mod part;
 mod pipeline;
@@ -50,8 +51,8 @@ pub use output::{Candidate, Cause, Diagnosis, PartRows, Partial, UnexplainedCell
 pub use part::Part;
 
 pub use residuals::{
-    estimate_noise, measured, predict, ratios, scores, simulate_test, simulated, CellScores,
-    NoiseFloor, Whitening, CHANNELS, SCORE_WINDOW,
+    estimate_noise, padded, predict, ratios, scores, simulate_test, CellScores, Cells, Channel,
+    Diverged, NoiseFloor, PerChannel, TestRun, Whitening, SCORE_WINDOW,
 };
 
 use crate::campaign::screen::screen;

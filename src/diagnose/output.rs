@@ -2,7 +2,7 @@
 
 use super::effect::Effect;
 use super::evidence::EVIDENCE_SIGMAS;
-use super::residuals::{NoiseFloor, CHANNELS, SCORE_WINDOW};
+use super::residuals::{Cells, NoiseFloor, SCORE_WINDOW};
 use super::{EXPLAINED_RATIO, MISS_RATIO, REQUIRED_GAIN};
 use crate::identify::Identification;
 use crate::params::{ActuatorModel, Params, ServovalveModel};
@@ -10,13 +10,13 @@ use serde::Serialize;
 use std::collections::BTreeMap;
 
 /// A model's figures per test and channel over one part of the tests (the order of the
-/// campaign): NaN where the channel is absent, infinite where the run diverged.
+/// campaign; [`Cells`]).
 #[derive(Debug, Clone, Default)]
 pub struct PartRows {
     /// The predictive score ([`super::residuals::CellScores::score`]).
-    pub score: Vec<[f64; 5]>,
+    pub score: Vec<Cells>,
     /// The standardised residual ([`super::residuals::CellScores::residual`]).
-    pub residual: Vec<[f64; 5]>,
+    pub residual: Vec<Cells>,
     /// Whether the model's noise-free run left the operating envelope (spec section 8)
     /// over the part where the measured table did not, per test.
     pub left_envelope: Vec<bool>,
@@ -113,8 +113,9 @@ pub struct Diagnosis {
     pub identification: Identification,
     pub baseline: Params,
     pub noise: NoiseFloor,
-    /// Per test (campaign order) and channel, over the whole test.
-    pub baseline_rows: Vec<(String, [f64; 5])>,
+    /// Per test (campaign order) and channel, over the whole test
+    /// ([`super::residuals::ratios`]).
+    pub baseline_rows: Vec<(String, Cells)>,
     /// The baseline on the selection and report quarters.
     pub baseline_select: PartRows,
     pub baseline_report: PartRows,
@@ -179,17 +180,16 @@ impl Diagnosis {
             Some(c) => json!(c.parameters),
             None => json!({}),
         };
-        let cells = |r: &[f64; 5]| -> serde_json::Value {
+        // the finite cells: a diverged run's are left out like absent channels
+        let cells = |r: &Cells| -> serde_json::Value {
             serde_json::Value::Object(
-                CHANNELS
-                    .iter()
-                    .zip(r)
-                    .filter(|(_, v)| v.is_finite())
-                    .map(|(ch, v)| (ch.to_string(), json!(v)))
+                r.iter()
+                    .filter_map(|(ch, v)| v.filter(|v| v.is_finite()).map(|v| (ch, v)))
+                    .map(|(ch, v)| (ch.name().to_string(), json!(v)))
                     .collect(),
             )
         };
-        let per_test = |rows: &[[f64; 5]]| -> serde_json::Map<String, serde_json::Value> {
+        let per_test = |rows: &[Cells]| -> serde_json::Map<String, serde_json::Value> {
             self.tests
                 .iter()
                 .zip(rows)

@@ -9,10 +9,11 @@ use super::candidates::{
 };
 use super::effect::{Effect, EFFECTS};
 use super::locate::unexplained_cells;
+use super::missed::Missed;
 use super::output::{Candidate, Cause, Diagnosis, PartRows, Partial};
 use super::part::Part;
-use super::residuals::{estimate_noise, ratios, simulate_test, NoiseFloor, Whitening};
-use super::{trace_enabled, unphysical, Progress, EXPLAINED_RATIO, MISS_RATIO, REQUIRED_GAIN};
+use super::residuals::{estimate_noise, ratios, simulate_test, Cells, NoiseFloor, Whitening};
+use super::{trace_enabled, unphysical, Progress, EXPLAINED_RATIO, REQUIRED_GAIN};
 use crate::campaign::{Campaign, Record};
 use crate::identify::lsq::LsqOptions;
 use crate::identify::spool::refine_servovalve;
@@ -47,52 +48,6 @@ const CANDIDATE_LSQ: LsqOptions = LsqOptions {
     step: 1e-4,
     parallel: false,
 };
-
-/// The cells a model misses ([`MISS_RATIO`]) on one quarter; candidates are scored on
-/// them, so an effect that lives in a few tests is not diluted by the many it does not
-/// touch.
-struct Missed {
-    cells: Vec<[bool; 5]>,
-    any: bool,
-}
-
-impl Missed {
-    fn of(residual_rows: &[[f64; 5]]) -> Missed {
-        let cells: Vec<[bool; 5]> = residual_rows
-            .iter()
-            .map(|r| r.map(|x| !x.is_nan() && x > MISS_RATIO))
-            .collect();
-        let any = cells.iter().flatten().any(|&m| m);
-        Missed { cells, any }
-    }
-
-    /// RMS over the missed cells (over every cell when none is missed).
-    fn rms(&self, rows: &[[f64; 5]]) -> f64 {
-        let v: Vec<f64> = rows
-            .iter()
-            .zip(&self.cells)
-            .flat_map(|(r, m)| {
-                r.iter()
-                    .zip(m)
-                    .filter(|(_, &m)| m || !self.any)
-                    .map(|(x, _)| *x)
-            })
-            // NaN: the channel is absent; a diverged run's cells are infinite and count
-            .filter(|x| !x.is_nan())
-            .collect();
-        (v.iter().map(|x| x * x).sum::<f64>() / v.len().max(1) as f64).sqrt()
-    }
-
-    /// Whether every missed cell is explained by a model whose rows are `rows`: its
-    /// residual there is within [`EXPLAINED_RATIO`] (the rule of `explained`, judged cell
-    /// by cell so that the many cells one effect fixes cannot dilute the few another
-    /// leaves).
-    fn all_explained_by(&self, rows: &[[f64; 5]]) -> bool {
-        rows.iter()
-            .zip(&self.cells)
-            .all(|(r, m)| r.iter().zip(m).all(|(x, &m)| !m || *x <= EXPLAINED_RATIO))
-    }
-}
 
 /// A candidate explains the selection quarter when its residual there is within
 /// [`EXPLAINED_RATIO`] (polishing stops there).
@@ -181,7 +136,7 @@ impl Diagnoser<'_> {
     }
 
     /// Step 2: the baseline's residuals over every test, in noise units (the heat map).
-    fn baseline_rows(&self, base: &Params) -> Vec<(String, [f64; 5])> {
+    fn baseline_rows(&self, base: &Params) -> Vec<(String, Cells)> {
         let c = self.c;
         (0..c.records.len())
             .into_par_iter()
@@ -473,10 +428,7 @@ pub(super) fn diagnose_with(
         whitening,
         table: base,
         tests,
-        report_missed: Missed {
-            cells: Vec::new(),
-            any: false,
-        },
+        report_missed: Missed::default(),
         testable: testable.into_iter().map(|(e, _)| e).collect(),
         progress,
     };

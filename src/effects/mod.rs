@@ -100,7 +100,7 @@ pub struct Effect {
     pub no_effect: &'static [(&'static str, f64)],
     /// The recorded channels its signature needs, as alternatives: the effect can be
     /// tested when every channel of at least one alternative is recorded (names of
-    /// `crate::diagnose::CHANNELS`); otherwise the diagnosis reports it as not testable,
+    /// [`crate::diagnose::Channel::name`]); otherwise the diagnosis reports it as not testable,
     /// never as absent (issue 16 part 5).
     pub signature_channels: &'static [&'static [&'static str]],
 }

@@ -3,18 +3,19 @@
 //! the chosen cause, and before/after overlays of the worst tests and of the table TF.
 
 use crate::campaign::Campaign;
-use crate::diagnose::{measured, simulate_test, simulated, Diagnosis, Part, CHANNELS};
+use crate::diagnose::{padded, simulate_test, Channel, Diagnosis, Part};
 use crate::identify::frf::{Welch, WelchOptions};
 use crate::report::plot::{bode_png, xy_png, BodeCurve, Series};
 use crate::report::{escape_html, markdown_code, safe_file_name};
 use std::fmt::Write as _;
 use std::path::Path;
 
-/// Background colour of a residual ratio: white at the noise floor, red above 5x.
-fn heat(x: f64) -> String {
-    if !x.is_finite() {
+/// Background colour of a residual ratio: white at the noise floor, red above 5x, grey
+/// where there is none.
+fn heat(x: Option<f64>) -> String {
+    let Some(x) = x.filter(|x| x.is_finite()) else {
         return "#eee".into();
-    }
+    };
     let t = ((x - 1.0) / 4.0).clamp(0.0, 1.0);
     let g = (255.0 * (1.0 - 0.75 * t)) as u8;
     format!("rgb(255,{g},{g})")
@@ -35,11 +36,11 @@ pub fn write(dir: &Path, c: &Campaign, d: &Diagnosis) -> Result<(), super::Repor
     };
     let mut figures: Vec<(String, String)> = Vec::new();
     // the worst tests of the baseline: the largest residual ratio
-    let mut worst: Vec<(usize, usize, f64)> = d
+    let mut worst: Vec<(usize, Channel, f64)> = d
         .baseline_rows
         .iter()
         .enumerate()
-        .flat_map(|(i, (_, r))| r.iter().enumerate().map(move |(ch, x)| (i, ch, *x)))
+        .flat_map(|(i, (_, r))| r.iter().filter_map(move |(ch, x)| Some((i, ch, (*x)?))))
         .filter(|x| x.2.is_finite())
         .collect();
     worst.sort_by(|a, b| b.2.total_cmp(&a.2));
@@ -50,36 +51,40 @@ pub fn write(dir: &Path, c: &Campaign, d: &Diagnosis) -> Result<(), super::Repor
         }
         shown.push((i, ch));
         let r = &c.records[i];
-        let base = simulate_test(&d.baseline, c, i, Part::Whole);
-        let ext = simulate_test(&d.extended, c, i, Part::Whole);
-        let Some(m) = measured(r, ch) else {
+        let (base, ext) = (
+            simulate_test(&d.baseline, c, i, Part::Whole),
+            simulate_test(&d.extended, c, i, Part::Whole),
+        );
+        // every sample, NaN from a stop on (the plot leaves a gap there)
+        let (base, ext) = (padded(&base), padded(&ext));
+        let Some(m) = ch.measured(r) else {
             continue;
         };
         // a 1.5 s window around the largest baseline residual
         let k = (0..m.len())
             .max_by(|&a, &b| {
-                (m[a] - simulated(&base[a], ch))
+                (m[a] - ch.simulated(&base[a]))
                     .abs()
-                    .total_cmp(&(m[b] - simulated(&base[b], ch)).abs())
+                    .total_cmp(&(m[b] - ch.simulated(&base[b])).abs())
             })
             .unwrap_or(0);
         let half = (0.75 * c.sample_rate_of(i)) as usize;
         let (lo, hi) = (k.saturating_sub(half), (k + half).min(m.len()));
         let t: Vec<f64> = r.time_s[lo..hi].to_vec();
         let meas: Vec<f64> = m[lo..hi].to_vec();
-        let b: Vec<f64> = base[lo..hi].iter().map(|o| simulated(o, ch)).collect();
-        let e: Vec<f64> = ext[lo..hi].iter().map(|o| simulated(o, ch)).collect();
+        let b: Vec<f64> = base[lo..hi].iter().map(|o| ch.simulated(o)).collect();
+        let e: Vec<f64> = ext[lo..hi].iter().map(|o| ch.simulated(o)).collect();
         let name = &c.info.tests[i].name;
-        let file = safe_file_name(&format!("time_{name}_{}.png", CHANNELS[ch]));
+        let file = safe_file_name(&format!("time_{name}_{}.png", ch.name()));
         let ext_label = format!("extended ({cause})");
         xy_png(
             &dir.join(&file),
             &format!(
                 "{name}: {} (baseline residual {ratio:.1} x noise)",
-                CHANNELS[ch]
+                ch.name()
             ),
             "time (s)",
-            CHANNELS[ch],
+            ch.name(),
             &[
                 Series {
                     label: "measured",
@@ -102,7 +107,7 @@ pub fn write(dir: &Path, c: &Campaign, d: &Diagnosis) -> Result<(), super::Repor
             ],
         )?;
         figures.push((
-            format!("{name}, {}: measured vs baseline vs extended", CHANNELS[ch]),
+            format!("{name}, {}: measured vs baseline vs extended", ch.name()),
             file,
         ));
     }
@@ -117,14 +122,11 @@ pub fn write(dir: &Path, c: &Campaign, d: &Diagnosis) -> Result<(), super::Repor
             WelchOptions::for_resolution(fs, 0.25).fit_to(r.len(), 8),
         ) {
             let est = |acc: &[f64]| w.frf(&r.ref_acceleration_m_s2, acc).ok();
-            let base: Vec<f64> = simulate_test(&d.baseline, c, i, Part::Whole)
-                .iter()
-                .map(|o| o.acceleration_m_s2)
-                .collect();
-            let ext: Vec<f64> = simulate_test(&d.extended, c, i, Part::Whole)
-                .iter()
-                .map(|o| o.acceleration_m_s2)
-                .collect();
+            let acceleration = |p| -> Vec<f64> {
+                let run = simulate_test(p, c, i, Part::Whole);
+                padded(&run).iter().map(|o| o.acceleration_m_s2).collect()
+            };
+            let (base, ext) = (acceleration(&d.baseline), acceleration(&d.extended));
             let measured = r.acceleration_m_s2.as_deref().and_then(est);
             if let (Some(m), Some(b), Some(e)) = (measured, est(&base), est(&ext)) {
                 let ext_label = format!("extended ({cause})");
@@ -205,7 +207,7 @@ pub fn write(dir: &Path, c: &Campaign, d: &Diagnosis) -> Result<(), super::Repor
         "<h2>What the baseline gets wrong: residual RMS / noise RMS</h2><table><tr><th>test</th>",
     );
     md.push_str("## Baseline residual / noise RMS\n\n| test |");
-    for ch in CHANNELS {
+    for ch in Channel::ALL.map(Channel::name) {
         let _ = write!(html, "<th>{ch}</th>");
         let _ = write!(md, " {ch} |");
     }
@@ -214,26 +216,12 @@ pub fn write(dir: &Path, c: &Campaign, d: &Diagnosis) -> Result<(), super::Repor
     for (name, r) in &d.baseline_rows {
         let _ = write!(html, "<tr><td>{}</td>", escape_html(name));
         let _ = write!(md, "| {name} |");
-        for x in r {
-            let _ = write!(
-                html,
-                "<td style=\"background:{}\">{}</td>",
-                heat(*x),
-                if x.is_finite() {
-                    format!("{x:.2}")
-                } else {
-                    "-".into()
-                }
-            );
-            let _ = write!(
-                md,
-                " {} |",
-                if x.is_finite() {
-                    format!("{x:.2}")
-                } else {
-                    "-".into()
-                }
-            );
+        for x in r.values() {
+            // absent channels and a diverged run's infinite cells alike
+            let shown = x.filter(|x| x.is_finite());
+            let text = shown.map_or_else(|| "-".into(), |x| format!("{x:.2}"));
+            let _ = write!(html, "<td style=\"background:{}\">{text}</td>", heat(shown));
+            let _ = write!(md, " {text} |");
         }
         html.push_str("</tr>");
         md.push('\n');

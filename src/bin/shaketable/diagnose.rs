@@ -2,7 +2,7 @@
 //! the extended model and its gain on held-out tests.
 
 use shaketable::campaign::format::read_campaign;
-use shaketable::diagnose::{diagnose, CHANNELS};
+use shaketable::diagnose::{diagnose, Channel};
 use std::path::PathBuf;
 
 #[derive(clap::Args)]
@@ -87,17 +87,14 @@ pub fn run(args: Args) -> anyhow::Result<()> {
     );
     println!(
         "baseline residual / noise RMS per test ({}):",
-        CHANNELS.join(", ")
+        Channel::ALL.map(Channel::name).join(", ")
     );
     for (name, r) in &d.baseline_rows {
         let cells: Vec<String> = r
-            .iter()
-            .map(|v| {
-                if v.is_finite() {
-                    format!("{v:8.2}")
-                } else {
-                    "       -".into()
-                }
+            .values()
+            .map(|v| match v {
+                Some(v) if v.is_finite() => format!("{v:8.2}"),
+                _ => "       -".into(),
             })
             .collect();
         println!("  {name:4} {}", cells.join(" "));

@@ -1,35 +1,6 @@
-//! Unit tests of the selection rules of [`super`]: missed cells, `explained` per cell,
-//! the verdict, the judged candidate, the effects searched again.
+//! Unit tests of the selection rules of [`super`]: the verdict, the judged candidate, the
+//! effects searched again.
 use super::*;
-
-const NAN: f64 = f64::NAN;
-
-#[test]
-fn a_missed_cell_is_one_above_the_miss_ratio_and_absent_cells_never_are() {
-    let rows = [
-        [1.0, MISS_RATIO, MISS_RATIO * 1.01, NAN, 0.5],
-        [0.2, 0.3, NAN, NAN, 1.4],
-    ];
-    let m = Missed::of(&rows);
-    assert!(m.any);
-    assert_eq!(m.cells[0], [false, false, true, false, false]);
-    assert_eq!(m.cells[1], [false; 5]);
-    // candidates are scored on that cell alone
-    let trial = [[9.0, 9.0, 3.0, NAN, 9.0], [9.0, 9.0, NAN, NAN, 9.0]];
-    assert_eq!(m.rms(&trial), 3.0);
-}
-
-#[test]
-fn with_nothing_missed_every_present_cell_counts_and_a_divergence_is_not_hidden() {
-    let rows = [[1.0, 1.2, NAN, 0.9, 1.1]];
-    let m = Missed::of(&rows);
-    assert!(!m.any);
-    let trial = [[2.0, 2.0, NAN, 2.0, 2.0]];
-    assert_eq!(m.rms(&trial), 2.0);
-    // a diverged run scores infinite cells: they count, they do not vanish like NaN
-    let diverged = [[2.0, f64::INFINITY, NAN, 2.0, 2.0]];
-    assert_eq!(m.rms(&diverged), f64::INFINITY);
-}
 
 #[test]
 fn a_candidate_explains_the_data_up_to_the_explained_ratio() {
@@ -38,19 +9,6 @@ fn a_candidate_explains_the_data_up_to_the_explained_ratio() {
     assert!(explains(&c));
     c.select_residual = EXPLAINED_RATIO * 1.001;
     assert!(!explains(&c));
-}
-
-/// `explained` is judged cell by cell: one missed cell left at 2.5 is not explained
-/// however many others the model fixes (the RMS over them would be below 2).
-#[test]
-fn one_cell_still_missed_leaves_the_data_unexplained() {
-    let baseline = [[5.0, 5.0, 5.0, NAN, 1.0], [5.0, 5.0, 5.0, NAN, 4.0]];
-    let m = Missed::of(&baseline);
-    let fixed = [[1.0, 1.0, 1.0, NAN, 9.0], [1.0, 1.0, 1.0, NAN, 1.5]];
-    assert!(m.all_explained_by(&fixed));
-    let one_left = [[1.0, 1.0, 1.0, NAN, 1.0], [1.0, 1.0, 1.0, NAN, 2.5]];
-    assert!(m.rms(&one_left) < EXPLAINED_RATIO);
-    assert!(!m.all_explained_by(&one_left));
 }
 
 /// A search judges the best candidate that is evidence, not a better-scoring empty one.

@@ -23,6 +23,7 @@
 mod channels;
 mod noise;
 mod prediction;
+mod run;
 mod scoring;
 mod spectral;
 mod whitening;
@@ -30,6 +31,7 @@ mod whitening;
 pub use channels::*;
 pub use noise::*;
 pub use prediction::*;
+pub use run::*;
 pub use scoring::*;
 pub use spectral::*;
 pub use whitening::*;

@@ -1,7 +1,7 @@
 //! The noise floor per channel, estimated from the data (rest segments and the
 //! high-frequency content), never from a generator's settings.
 
-use super::channels::measured;
+use super::channels::{Channel, PerChannel};
 use crate::campaign::Campaign;
 use crate::SensorNoise;
 use rand::SeedableRng;
@@ -40,28 +40,30 @@ pub struct SensorLevels {
 }
 
 impl NoiseFloor {
-    /// Noise floor of channel `ch` of [`CHANNELS`] (the residual's unit).
-    pub fn of(&self, ch: usize) -> f64 {
-        [
-            self.displacement_m,
-            self.acceleration_m_s2,
-            self.force_n,
-            self.spool,
-            self.valve_command,
-        ][ch]
+    /// Noise floor of channel `ch` (the residual's unit); `None` when no test recorded
+    /// the channel (the field is NaN).
+    pub fn of(&self, ch: Channel) -> Option<f64> {
+        let floor = match ch {
+            Channel::Displacement => self.displacement_m,
+            Channel::Acceleration => self.acceleration_m_s2,
+            Channel::Force => self.force_n,
+            Channel::Spool => self.spool,
+            Channel::ValveCommand => self.valve_command,
+        };
+        floor.is_finite().then_some(floor)
     }
 
     /// Measurement noise of channel `ch` alone (the command has none: its spread is the
     /// loop's response, which the noisy run predicts).
-    pub fn measurement(&self, ch: usize) -> f64 {
+    pub fn measurement(&self, ch: Channel) -> f64 {
         let s = &self.sensor;
-        [
-            s.displacement_m,
-            s.acceleration_m_s2,
-            s.force_n,
-            s.spool,
-            0.0,
-        ][ch]
+        match ch {
+            Channel::Displacement => s.displacement_m,
+            Channel::Acceleration => s.acceleration_m_s2,
+            Channel::Force => s.force_n,
+            Channel::Spool => s.spool,
+            Channel::ValveCommand => 0.0,
+        }
     }
 
     /// Seeded sensor noise at the sensor levels for a record of `n` samples (the feedback
@@ -118,14 +120,27 @@ pub(super) fn fourth_difference_rms(x: &[f64]) -> f64 {
     std_dev(&d) / 70f64.sqrt()
 }
 
+/// Lower bound of a sensor's noise estimate, so that a noise-free record does not divide
+/// by zero (`None` for the command, which no sensor reads).
+fn sensor_lower_bound(ch: Channel) -> Option<f64> {
+    match ch {
+        Channel::Displacement => Some(1e-9),
+        Channel::Acceleration => Some(1e-6),
+        Channel::Force => Some(1e-3),
+        Channel::Spool => Some(1e-7),
+        Channel::ValveCommand => None,
+    }
+}
+
 /// Noise of every channel, from the data only. The floor: the rest segments (zero
 /// reference) at the start of the tests, median over tests. The sensor noise: the
 /// high-frequency content (fourth difference, median over tests), which the loop's
 /// response (below 50 Hz) does not reach. Without a rest segment of 64 samples or more
 /// in any test, the floor is the sensor noise (and the command's from the gains).
 pub fn estimate_noise(c: &Campaign) -> NoiseFloor {
-    let mut rest_est: [Vec<f64>; 5] = Default::default();
-    let mut hf_est: [Vec<f64>; 4] = Default::default();
+    use Channel::*;
+    let mut rest_est: PerChannel<Vec<f64>> = Default::default();
+    let mut hf_est: PerChannel<Vec<f64>> = Default::default();
     for r in &c.records {
         let rest = (0..r.len())
             .take_while(|&k| {
@@ -134,9 +149,9 @@ pub fn estimate_noise(c: &Campaign) -> NoiseFloor {
                     && r.ref_acceleration_m_s2[k] == 0.0
             })
             .count();
-        for ch in 0..5 {
-            if let Some(m) = measured(r, ch) {
-                if ch < 4 {
+        for ch in Channel::ALL {
+            if let Some(m) = ch.measured(r) {
+                if sensor_lower_bound(ch).is_some() {
                     hf_est[ch].push(fourth_difference_rms(m));
                 }
                 if rest >= 64 {
@@ -145,59 +160,45 @@ pub fn estimate_noise(c: &Campaign) -> NoiseFloor {
             }
         }
     }
-    let hf: Vec<f64> = hf_est.iter().map(|v| median(v.clone())).collect();
-    let rest: Vec<f64> = rest_est.iter().map(|v| median(v.clone())).collect();
-    let have_rest = rest[0].is_finite();
+    let hf = hf_est.map(median);
+    let rest = rest_est.map(median);
+    let have_rest = rest[Displacement].is_finite();
     let method = if have_rest {
         "floor from the rest segments (zero reference) at the start of the tests; sensor noise from the high-frequency content"
     } else {
         "floor and sensor noise from the high-frequency content (fourth difference; no rest segment)"
     };
-    // floors so that a noise-free record does not divide by zero
-    let lower = [1e-9, 1e-6, 1e-3, 1e-7];
-    let sensor: Vec<f64> = (0..4)
-        .map(|ch| {
-            if hf[ch].is_finite() {
-                hf[ch].max(lower[ch])
-            } else {
-                f64::NAN
-            }
-        })
-        .collect();
-    // the floor is never below the sensor noise
-    let floor: Vec<f64> = (0..4)
-        .map(|ch| {
-            if have_rest && rest[ch].is_finite() {
-                rest[ch].max(sensor[ch])
-            } else {
-                sensor[ch]
-            }
-        })
-        .collect();
+    // NaN where no test recorded the sensor
+    let sensor = PerChannel::from_fn(|ch| match sensor_lower_bound(ch) {
+        Some(lower) if hf[ch].is_finite() => hf[ch].max(lower),
+        _ => f64::NAN,
+    });
+    // the floor is never below the sensor noise (the command's: the loop's response to it)
+    let floor = |ch: Channel, below: f64| {
+        if have_rest && rest[ch].is_finite() {
+            rest[ch].max(below)
+        } else {
+            below
+        }
+    };
     // the gains are known: `diagnose` refuses a campaign without them
     let k = &c.info.controller;
     let gain = |g: Option<f64>| g.unwrap_or(0.0);
-    let from_gains = ((gain(k.kp) * sensor[0]).powi(2)
-        + (gain(k.ka) * sensor[1]).powi(2)
-        + (gain(k.kdp) * sensor[2]).powi(2))
+    let from_gains = ((gain(k.kp) * sensor[Displacement]).powi(2)
+        + (gain(k.ka) * sensor[Acceleration]).powi(2)
+        + (gain(k.kdp) * sensor[Force]).powi(2))
     .sqrt();
-    let su = if have_rest && rest[4].is_finite() {
-        rest[4].max(from_gains)
-    } else {
-        from_gains
-    }
-    .max(1e-7);
     NoiseFloor {
-        displacement_m: floor[0],
-        acceleration_m_s2: floor[1],
-        force_n: floor[2],
-        spool: floor[3],
-        valve_command: su,
+        displacement_m: floor(Displacement, sensor[Displacement]),
+        acceleration_m_s2: floor(Acceleration, sensor[Acceleration]),
+        force_n: floor(Force, sensor[Force]),
+        spool: floor(Spool, sensor[Spool]),
+        valve_command: floor(ValveCommand, from_gains).max(1e-7),
         sensor: SensorLevels {
-            displacement_m: sensor[0],
-            acceleration_m_s2: sensor[1],
-            force_n: sensor[2],
-            spool: sensor[3],
+            displacement_m: sensor[Displacement],
+            acceleration_m_s2: sensor[Acceleration],
+            force_n: sensor[Force],
+            spool: sensor[Spool],
         },
         method,
     }

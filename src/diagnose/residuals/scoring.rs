@@ -1,7 +1,7 @@
 //! The predictive score per test and channel: octave bands, windows, the Gaussian log
 //! score of the residual power under the predicted spread.
 
-use super::channels::{measured, simulated, CHANNELS};
+use super::channels::{Channel, PerChannel};
 use super::noise::NoiseFloor;
 use super::prediction::{predict, Prediction};
 use super::spectral::{band_split, octave_bands};
@@ -17,17 +17,20 @@ pub const SCORE_WINDOW: usize = 128;
 /// Windows over which the predicted spread is averaged (centred; 1.25 s at 512 Hz).
 pub const SPREAD_WINDOWS: usize = 5;
 
-/// Held-out figures of a model per channel (NaN where the channel is absent, infinite
-/// where the run diverged).
+/// One figure per channel of a test: `None` where the channel is not scored (not
+/// recorded, no noise estimate, too short a part), infinite where the run diverged.
+pub type Cells = PerChannel<Option<f64>>;
+
+/// Held-out figures of a model per channel ([`Cells`]).
 #[derive(Debug, Clone, Copy)]
 pub struct CellScores {
     /// The predictive score as an equivalent noise ratio: the square root of the mean over
     /// windows of `P_meas/P_pred + ln(P_pred/s^2)` (module doc). It ranks models.
-    pub score: [f64; 5],
+    pub score: Cells,
     /// The standardised residual: the square root of the mean of `P_meas/P_pred`, the
     /// residual in units of the spread the model itself predicts (the noise floor for a
     /// model the noise does not excite, where both equal the ratio of [`ratios`]).
-    pub residual: [f64; 5],
+    pub residual: Cells,
 }
 
 /// Degrees of freedom a score window holds in its band (`2 W L / fs`): its length is
@@ -91,25 +94,25 @@ pub fn scores(
     sample_rate_hz: f64,
 ) -> CellScores {
     let mut out = CellScores {
-        score: [f64::NAN; 5],
-        residual: [f64::NAN; 5],
+        score: Cells::default(),
+        residual: Cells::default(),
     };
-    for ch in 0..CHANNELS.len() {
+    for ch in Channel::ALL {
         let Some(bands) = channel_bands(r, pred, noise, part, sample_rate_hz, ch) else {
             continue;
         };
         if bands.is_empty() {
             // a diverged run predicts nothing: an infinite score, never a cell left out
             // as if the channel were absent
-            out.score[ch] = f64::INFINITY;
-            out.residual[ch] = f64::INFINITY;
+            out.score[ch] = Some(f64::INFINITY);
+            out.residual[ch] = Some(f64::INFINITY);
             continue;
         }
         let nb = bands.len() as f64;
         let score: f64 = bands.iter().map(|b| b.score_term).sum();
         let ratio: f64 = bands.iter().map(|b| b.ratio).sum();
-        out.score[ch] = (score / nb).max(0.0).sqrt();
-        out.residual[ch] = (ratio / nb).sqrt();
+        out.score[ch] = Some((score / nb).max(0.0).sqrt());
+        out.residual[ch] = Some((ratio / nb).sqrt());
     }
     out
 }
@@ -125,29 +128,36 @@ pub struct BandScore {
 
 /// The octave bands of channel `ch` of a prediction over `part` (see [`scores`]): `None`
 /// when the channel is absent (or has no noise estimate) or `part` is too short, empty
-/// when the run diverged (a non-finite residual or spread).
+/// when the run diverged (it stopped before the part's end, or a non-finite residual or
+/// spread).
 pub fn channel_bands(
     r: &Record,
     pred: &Prediction,
     noise: &NoiseFloor,
     part: Part,
     sample_rate_hz: f64,
-    ch: usize,
+    ch: Channel,
 ) -> Option<Vec<BandScore>> {
     let range = part.range(r.len());
-    let m = measured(r, ch)?;
-    let s = noise.of(ch);
-    if range.len() < 2 || !s.is_finite() {
+    let m = ch.measured(r)?;
+    let s = noise.of(ch)?;
+    if range.len() < 2 {
         return None;
     }
     let bands = octave_bands(sample_rate_hz);
     let nyquist = sample_rate_hz / 2.0;
-    let white = white_variance(noise, ch);
+    let white = white_variance(noise, ch, s);
+    // a run that stopped inside the part predicts nothing there
+    let (Some(locked), Some(spread)) = (
+        pred.locked_over(range.clone()),
+        pred.spread(range.clone(), ch),
+    ) else {
+        return Some(Vec::new());
+    };
     let residual: Vec<f64> = range
-        .clone()
-        .map(|k| m[k] - simulated(&pred.locked[k], ch))
+        .zip(locked)
+        .map(|(k, o)| m[k] - ch.simulated(o))
         .collect();
-    let spread = pred.spread(range, ch);
     if residual
         .iter()
         .chain(spread.iter().flatten())
@@ -242,14 +252,16 @@ pub fn test_scores_of_parts(
         .zip(hold)
         .map(|(&part, &held)| {
             let range = part.range(c.records[i].len());
-            let locked =
-                &pred.locked[range.start.min(pred.locked.len())..range.end.min(pred.locked.len())];
-            let left = crate::model::limits::first_exceeded(p, locked).is_some()
+            // a run that stopped inside the part has left the envelope there
+            let left = !range.is_empty()
+                && pred
+                    .locked_over(range.clone())
+                    .is_none_or(|locked| crate::model::limits::first_exceeded(p, locked).is_some())
                 && !measured_beyond_envelope(p, &c.records[i], range);
             if held && left {
                 let inf = CellScores {
-                    score: [f64::INFINITY; 5],
-                    residual: [f64::INFINITY; 5],
+                    score: Cells::filled(Some(f64::INFINITY)),
+                    residual: Cells::filled(Some(f64::INFINITY)),
                 };
                 return (inf, left);
             }
@@ -292,8 +304,8 @@ pub fn score_sum(p: &Params, c: &Campaign, tests: &[usize], noise: &NoiseFloor, 
         .map(|&i| {
             test_scores(p, c, i, part, noise)
                 .score
-                .iter()
-                .filter(|x| !x.is_nan())
+                .values()
+                .flatten()
                 .map(|x| x * x)
                 .sum::<f64>()
         })

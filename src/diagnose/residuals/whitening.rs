@@ -1,6 +1,6 @@
 //! The band-normalised residual least squares minimises ([`Whitening`]).
 
-use super::channels::{measured, simulated};
+use super::channels::{Channel, PerChannel};
 use super::noise::NoiseFloor;
 use super::prediction::predict;
 use super::spectral::{dct, octave_bands, FIT_MAX_HZ};
@@ -20,7 +20,7 @@ use crate::Outputs;
 #[derive(Debug, Clone, Default)]
 pub struct Whitening {
     /// Per test of the campaign, per channel (empty when absent or not computed).
-    weights: Vec<[Vec<f64>; 5]>,
+    weights: Vec<PerChannel<Vec<f64>>>,
     part: Option<Part>,
 }
 
@@ -28,7 +28,7 @@ impl Whitening {
     /// From `p`'s prediction of `tests` over `part`.
     pub fn new(p: &Params, c: &Campaign, tests: &[usize], noise: &NoiseFloor, part: Part) -> Self {
         use rayon::prelude::*;
-        let per: Vec<(usize, [Vec<f64>; 5])> = tests
+        let per: Vec<(usize, PerChannel<Vec<f64>>)> = tests
             .par_iter()
             .map(|&i| {
                 // each test's octave bands at its own rate
@@ -37,7 +37,7 @@ impl Whitening {
                 let r = &c.records[i];
                 let range = part.range(r.len());
                 let pred = predict(p, c, i, part.simulated(), noise);
-                let mut w: [Vec<f64>; 5] = Default::default();
+                let mut w: PerChannel<Vec<f64>> = Default::default();
                 let n = range.len();
                 if n < 2 {
                     return (i, w);
@@ -50,14 +50,21 @@ impl Whitening {
                         .unwrap_or(0)
                 };
                 let kmax = ((FIT_MAX_HZ * 2.0 * n as f64 / fs).ceil() as usize).min(n);
-                for (ch, wc) in w.iter_mut().enumerate() {
-                    if measured(r, ch).is_none() || !noise.of(ch).is_finite() {
+                let nb = bands.len() as f64;
+                for ch in Channel::ALL {
+                    let (Some(_), Some(s)) = (ch.measured(r), noise.of(ch)) else {
                         continue;
-                    }
-                    let white = white_variance(noise, ch);
+                    };
+                    let Some(spreads) = pred.spread(range.clone(), ch) else {
+                        // a run that stopped predicts no spread: every coefficient gets the
+                        // power floor's weight, the largest there is
+                        w[ch] = vec![1.0 / (nb * f64::MIN_POSITIVE).sqrt(); kmax];
+                        continue;
+                    };
+                    let white = white_variance(noise, ch, s);
                     let mut energy = vec![0.0; bands.len()];
                     let mut count = vec![0usize; bands.len()];
-                    for spread in pred.spread(range.clone(), ch) {
+                    for spread in spreads {
                         for (k, v) in dct(&spread).iter().enumerate() {
                             energy[band_of(k)] += v * v / pred.noisy.len() as f64;
                         }
@@ -65,8 +72,7 @@ impl Whitening {
                     for k in 0..n {
                         count[band_of(k)] += 1;
                     }
-                    let nb = bands.len() as f64;
-                    *wc = (0..kmax)
+                    w[ch] = (0..kmax)
                         .map(|k| {
                             let b = band_of(k);
                             let e = energy[b] + white * n as f64 / 2.0 * count[b] as f64;
@@ -87,6 +93,16 @@ impl Whitening {
         }
     }
 
+    /// Whether [`Whitening::residuals`] gives test `i` any coefficient (a recorded channel
+    /// with weights).
+    pub fn weighs(&self, c: &Campaign, i: usize) -> bool {
+        let (Some(_), Some(w)) = (self.part, self.weights.get(i)) else {
+            return false;
+        };
+        w.iter()
+            .any(|(ch, wc)| !wc.is_empty() && ch.measured(&c.records[i]).is_some())
+    }
+
     /// The weighted DCT coefficients of the residual of `sim` (a run over `part`) on test
     /// `i`, appended to `out`.
     pub fn residuals(&self, c: &Campaign, i: usize, sim: &[Outputs], out: &mut Vec<f64>) {
@@ -95,14 +111,14 @@ impl Whitening {
         };
         let r = &c.records[i];
         let range = part.range(r.len());
-        for (ch, wc) in w.iter().enumerate() {
-            let Some(m) = measured(r, ch) else { continue };
+        for (ch, wc) in w.iter() {
+            let Some(m) = ch.measured(r) else { continue };
             if wc.is_empty() {
                 continue;
             }
             let x: Vec<f64> = range
                 .clone()
-                .map(|k| m[k] - simulated(&sim[k], ch))
+                .map(|k| m[k] - ch.simulated(&sim[k]))
                 .collect();
             let d = dct(&x);
             out.extend(d.iter().zip(wc).map(|(v, w)| v * w));
@@ -110,12 +126,13 @@ impl Whitening {
     }
 }
 
-/// Variance of the noise a prediction does not hold in channel `ch`: the spool's (never
-/// fed back) and a tiny floor for the command (recorded without noise).
-pub(super) fn white_variance(noise: &NoiseFloor, ch: usize) -> f64 {
-    if ch == 3 {
+/// Variance of the noise a prediction does not hold in channel `ch`, whose noise floor is
+/// `floor`: the spool's (never fed back) and a tiny floor for the others (the command is
+/// recorded without noise; the sensors' noise is in the prediction).
+pub(super) fn white_variance(noise: &NoiseFloor, ch: Channel, floor: f64) -> f64 {
+    if ch == Channel::Spool {
         noise.measurement(ch).powi(2)
     } else {
-        1e-6 * noise.of(ch).powi(2)
+        1e-6 * floor.powi(2)
     }
 }
