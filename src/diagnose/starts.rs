@@ -14,6 +14,44 @@ use std::f64::consts::PI;
 /// the 41 t TREES Lab table (`free_play`'s default), scaled to the table.
 const ROD_MASS_FRACTION: f64 = 0.036;
 
+/// Start grids of the candidates' fits, in the table's terms where the effect scales with
+/// it. They only seed the fits (the caller screens every start and fits the best two), so
+/// they span each effect's plausible range coarsely rather than finely.
+mod grid {
+    /// Apparent-mass resolution of the specimen's and foundation's FRF starts (Hz): four
+    /// lines per hertz separate modes a few percent apart.
+    pub const APPARENT_MASS_RESOLUTION_HZ: f64 = 0.25;
+    /// Welch segments the apparent mass averages at least (its variance).
+    pub const APPARENT_MASS_MIN_SEGMENTS: usize = 8;
+    /// The band of the apparent mass (Hz): where the random tests excite the table.
+    pub const APPARENT_MASS_BAND_HZ: [f64; 2] = [1.0, 40.0];
+    /// Specimen masses (table masses) at the apparent mass's peak; without a random test
+    /// a 0.2 table-mass specimen at 5 Hz (the middle of the building-model range).
+    pub const SPECIMEN_MASS_RATIOS: [f64; 2] = [0.1, 0.3];
+    pub const SPECIMEN_BLIND: [f64; 3] = [0.2, 5.0, 0.03];
+    /// A specimen's or foundation's starting damping ratios: typical of steel or RC
+    /// models (3 %) and of a foundation block on soil (5 %).
+    pub const SPECIMEN_DAMPING: f64 = 0.03;
+    pub const FOUNDATION_DAMPING: f64 = 0.05;
+    /// Foundation masses (table masses) at the data's frequency, and the blind grid of
+    /// frequencies (Hz) and masses over the plausible band.
+    pub const FOUNDATION_INFORMED_MASS_RATIOS: [f64; 3] = [3.0, 10.0, 40.0];
+    pub const FOUNDATION_FREQUENCIES_HZ: [f64; 4] = [8.0, 15.0, 25.0, 40.0];
+    pub const FOUNDATION_MASS_RATIOS: [f64; 2] = [3.0, 20.0];
+    /// Stick-slip static ratios and Stribeck velocities (m/s).
+    pub const STICK_SLIP_RATIOS: [f64; 3] = [1.5, 2.5, 3.5];
+    pub const STRIBECK_VELOCITIES_M_S: [f64; 2] = [0.002, 0.006];
+    /// Samples over which the sines' speed is differenced (the plateau, not its noise).
+    pub const PLATEAU_LAG_SAMPLES: usize = 8;
+    /// The least flow-limit start (m^3/s): a table at rest has no plateau.
+    pub const MIN_FLOW_START_M3_S: f64 = 1e-3;
+    /// Deadbands (fractions of the rated spool) and asymmetry ratios either side of 1.
+    pub const DEADBANDS: [f64; 2] = [0.01, 0.03];
+    pub const ASYMMETRY_RATIOS: [f64; 2] = [0.7, 1.4];
+    /// Free-play gaps (m): a fraction of a millimetre to a millimetre and a half.
+    pub const GAPS_M: [f64; 3] = [2e-4, 6e-4, 1.5e-3];
+}
+
 pub(super) fn indices(c: &Campaign, names: &[&str]) -> Vec<usize> {
     names
         .iter()
@@ -29,7 +67,8 @@ pub(super) fn apparent_mass(c: &Campaign) -> Option<(Vec<f64>, Vec<Complex64>)> 
     let (r, fs) = (&c.records[i], c.sample_rate_of(i));
     let w = Welch::new(
         fs,
-        WelchOptions::for_resolution(fs, 0.25).fit_to(r.len(), 8),
+        WelchOptions::for_resolution(fs, grid::APPARENT_MASS_RESOLUTION_HZ)
+            .fit_to(r.len(), grid::APPARENT_MASS_MIN_SEGMENTS),
     )
     .ok()?;
     let e = w
@@ -39,7 +78,8 @@ pub(super) fn apparent_mass(c: &Campaign) -> Option<(Vec<f64>, Vec<Complex64>)> 
             r.force_n.as_deref()?,
         )
         .ok()?;
-    let idx = e.band(1.0, 40.0);
+    let [lo, hi] = grid::APPARENT_MASS_BAND_HZ;
+    let idx = e.band(lo, hi);
     Some((
         idx.iter().map(|&i| e.frequency_hz[i]).collect(),
         idx.iter().map(|&i| e.h1[i]).collect(),
@@ -58,13 +98,17 @@ pub(super) fn starts(
         Effect::Specimen => {
             // the specimen's resonance is the largest deviation of F/a from a rigid mass
             let Some((f, h)) = apparent_mass(c) else {
-                return vec![vec![0.2 * m, 5.0, 0.03]];
+                let [r, f, z] = grid::SPECIMEN_BLIND;
+                return vec![vec![r * m, f, z]];
             };
             let k = (0..f.len())
                 .max_by(|&a, &b| (h[a] - m).norm().total_cmp(&(h[b] - m).norm()))
                 .unwrap_or(0);
             let fs = f[k];
-            [0.1, 0.3].iter().map(|r| vec![r * m, fs, 0.03]).collect()
+            grid::SPECIMEN_MASS_RATIOS
+                .iter()
+                .map(|r| vec![r * m, fs, grid::SPECIMEN_DAMPING])
+                .collect()
         }
         Effect::Foundation => {
             // the FRF fit and a spread over the plausible band, screened by the caller
@@ -72,21 +116,21 @@ pub(super) fn starts(
             // on a smeared peak, so the mass is spread
             let mut g: Vec<Vec<f64>> = Vec::new();
             if let Some(f) = informed {
-                for r in [3.0, 10.0, 40.0] {
-                    g.push(vec![r * m, f[1], 0.05]);
+                for r in grid::FOUNDATION_INFORMED_MASS_RATIOS {
+                    g.push(vec![r * m, f[1], grid::FOUNDATION_DAMPING]);
                 }
             }
-            for f in [8.0, 15.0, 25.0, 40.0] {
-                for r in [3.0, 20.0] {
-                    g.push(vec![r * m, f, 0.05]);
+            for f in grid::FOUNDATION_FREQUENCIES_HZ {
+                for r in grid::FOUNDATION_MASS_RATIOS {
+                    g.push(vec![r * m, f, grid::FOUNDATION_DAMPING]);
                 }
             }
             g
         }
         Effect::StickSlip => {
             let mut g = Vec::new();
-            for r in [1.5, 2.5, 3.5] {
-                for v in [0.002, 0.006] {
+            for r in grid::STICK_SLIP_RATIOS {
+                for v in grid::STRIBECK_VELOCITIES_M_S {
                     g.push(vec![r, v]);
                 }
             }
@@ -98,18 +142,21 @@ pub(super) fn starts(
             for (spec, r) in c.info.tests.iter().zip(&c.records) {
                 if let (TestKind::Sine, Some(x)) = (spec.kind, r.displacement_m.as_deref()) {
                     let fs = c.sample_rate_for(spec);
-                    for k in 8..x.len() {
-                        vmax = vmax.max(((x[k] - x[k - 8]) * fs / 8.0).abs());
+                    let lag = grid::PLATEAU_LAG_SAMPLES;
+                    for k in lag..x.len() {
+                        vmax = vmax.max(((x[k] - x[k - lag]) * fs / lag as f64).abs());
                     }
                 }
             }
             let q = vmax * base.actuator.piston_area_m2;
-            vec![vec![q.max(1e-3)]]
+            vec![vec![q.max(grid::MIN_FLOW_START_M3_S)]]
         }
-        Effect::ValveDeadband => vec![vec![0.01], vec![0.03]],
+        Effect::ValveDeadband => grid::DEADBANDS.iter().map(|&d| vec![d]).collect(),
         // a grid either side of symmetry; the direction split adds its own start
-        Effect::FrictionAsymmetry | Effect::FlowAsymmetry => vec![vec![0.7], vec![1.4]],
-        Effect::FreePlay => [2e-4, 6e-4, 1.5e-3]
+        Effect::FrictionAsymmetry | Effect::FlowAsymmetry => {
+            grid::ASYMMETRY_RATIOS.iter().map(|&r| vec![r]).collect()
+        }
+        Effect::FreePlay => grid::GAPS_M
             .iter()
             .map(|&g| vec![g, ROD_MASS_FRACTION * m])
             .collect(),
