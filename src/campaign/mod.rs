@@ -497,3 +497,12 @@ impl Campaign {
             .try_for_each(|t| self.controller_for(t).map(|_| ()))
     }
 }
+
+/// The smallest and largest sample of `x`, NaN ignored; (inf, -inf) when there is none
+/// (screening's flat-channel check and the what-was-read table both read it).
+pub(crate) fn min_max(x: &[f64]) -> (f64, f64) {
+    x.iter()
+        .fold((f64::INFINITY, f64::NEG_INFINITY), |(lo, hi), v| {
+            (lo.min(*v), hi.max(*v))
+        })
+}

@@ -192,13 +192,6 @@ pub struct CampaignRead {
     pub unknown_keys: Vec<&'static str>,
 }
 
-fn range(x: &[f64]) -> (f64, f64) {
-    x.iter()
-        .fold((f64::INFINITY, f64::NEG_INFINITY), |(lo, hi), v| {
-            (lo.min(*v), hi.max(*v))
-        })
-}
-
 impl Campaign {
     /// What was read: per test and channel, with the sources [`Campaign::sources`] holds.
     pub fn what_was_read(&self) -> CampaignRead {
@@ -214,7 +207,7 @@ impl Campaign {
                     .channels()
                     .into_iter()
                     .map(|(name, x)| {
-                        let (min, max) = range(x);
+                        let (min, max) = super::min_max(x);
                         ChannelRead {
                             channel: name.to_string(),
                             unit: unit_of(name),

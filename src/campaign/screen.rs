@@ -212,11 +212,7 @@ fn screen_channel(name: &str, x: &mut [f64], max_repaired: usize, out: &mut Vec<
         );
         out.push(finding(name, Action::Repaired, msg));
     }
-    let (lo, hi) = x
-        .iter()
-        .fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), &v| {
-            (a.min(v), b.max(v))
-        });
+    let (lo, hi) = super::min_max(x);
     if hi.is_nan() || hi <= lo {
         out.push(finding(
             name,
