@@ -82,6 +82,16 @@ struct Current {
     report: PartRows,
 }
 
+impl Current {
+    /// Where a candidate extending this model is held to the envelope ([`Hold`]).
+    fn hold(&self) -> Hold<'_> {
+        Hold {
+            select: &self.select,
+            report: &self.report,
+        }
+    }
+}
+
 impl Diagnoser<'_> {
     fn tick(&self, i: usize, total: usize, what: &str) {
         if let Some(p) = self.progress {
@@ -323,10 +333,7 @@ impl Diagnoser<'_> {
         if !missed.any || effects.is_empty() {
             return None;
         }
-        let hold = Hold {
-            select: &current.select,
-            report: &current.report,
-        };
+        let hold = current.hold();
         let step0 = PROGRESS_SETUP + round * SEARCH_STEPS;
         let total = step0 + SEARCH_STEPS;
         self.tick(
@@ -479,10 +486,7 @@ pub(super) fn diagnose_with(
                 // the next search must not credit its candidates with what this model's
                 // own parameters still had to settle
                 let best = if round + 1 < MAX_CAUSES && Missed::of(&best.select.residual).any {
-                    let hold = Hold {
-                        select: &current.select,
-                        report: &current.report,
-                    };
+                    let hold = current.hold();
                     d.settle(best, &missed, &hold)
                 } else {
                     best
