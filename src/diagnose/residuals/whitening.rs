@@ -3,7 +3,7 @@
 use super::channels::{Channel, PerChannel};
 use super::noise::NoiseFloor;
 use super::prediction::predict;
-use super::spectral::{dct, octave_bands, FIT_MAX_HZ};
+use super::spectral::{dct, dct_first, octave_bands, FIT_MAX_HZ};
 use super::Part;
 use crate::campaign::Campaign;
 use crate::params::Params;
@@ -120,7 +120,7 @@ impl Whitening {
                 .clone()
                 .map(|k| m[k] - ch.simulated(&sim[k]))
                 .collect();
-            let d = dct(&x);
+            let d = dct_first(&x, wc.len());
             out.extend(d.iter().zip(wc).map(|(v, w)| v * w));
         }
     }
