@@ -203,6 +203,12 @@ pub(super) fn candidate_range(bases: &[Params], which: BaselineParameter) -> Ran
     r
 }
 
+/// Whether some test of `c` recorded the spool, which pins the valve's dynamics; without
+/// it they come from the closed-loop fit of the table's motion and stay free.
+pub(super) fn spool_recorded(c: &Campaign) -> bool {
+    c.records.iter().any(|r| r.spool_position.is_some())
+}
+
 /// Relative half-width of the candidates' ranges (see [`candidate_range`]).
 const CANDIDATE_WIDTH: f64 = 0.5;
 
@@ -243,7 +249,17 @@ pub(super) fn refine_output_error(
         .chain(valve_dynamics(p0))
         .copied()
         .collect();
-    let ranges: Vec<Range> = free.iter().map(|&w| refinement_range(p0, w)).collect();
+    let spool_recorded = spool_recorded(c);
+    let ranges: Vec<Range> = free
+        .iter()
+        .map(|&w| match w {
+            // no spool pinned the valve: it is as free as in the candidates' fits
+            ValveFrequency | ValveDamping | ValveTimeConstant if !spool_recorded => {
+                range_within(p0, w, CANDIDATE_WIDTH)
+            }
+            _ => refinement_range(p0, w),
+        })
+        .collect();
     let (e, theta_e) = match effect {
         Some((e, t)) if e != Effect::StickSlip => (Some(e), t.to_vec()),
         _ => (None, Vec::new()),

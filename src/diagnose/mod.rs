@@ -85,11 +85,13 @@ pub type Progress<'a> = &'a (dyn Fn(usize, usize, &str) + Sync);
 pub const MAX_ADDED_MASS_RATIO: f64 = 100.0;
 
 /// Why the baseline identification cannot support a diagnosis of `c`, if it cannot:
-/// every part of the baseline must be identified by section 4, or the candidates would
-/// explain the defaults, and every test's gains known to simulate it. (The closed-loop
-/// fit of issue 16 part 3 is not yet accepted as the baseline: on the UTFSM recordings
-/// its predictive scores come out infinite, so a diagnosis on it would say nothing.)
+/// every part of the baseline must be identified, or the candidates would explain the
+/// defaults, and every test's gains known to simulate it. The closed-loop fit (issue 16
+/// part 3) supplies both when section 4 could not: its model is the baseline then.
 fn baseline_gaps(c: &Campaign, id: &Identification) -> Option<String> {
+    if id.closed_loop.is_some() {
+        return None;
+    }
     let mut gaps: Vec<String> = [
         (id.servovalve.is_none(), "servovalve"),
         (id.mass_kg.is_none(), "mass"),
@@ -104,7 +106,7 @@ fn baseline_gaps(c: &Campaign, id: &Identification) -> Option<String> {
     }
     (!gaps.is_empty()).then(|| {
         format!(
-            "diagnosis refused: the baseline identification lacks the {} ({})",
+            "diagnosis refused: the baseline identification lacks the {} and no closed-loop fit replaced it ({})",
             gaps.join(", "),
             id.missing.join("; ")
         )
