@@ -145,7 +145,7 @@ fn one_huge_sample_is_repaired_with_a_note() {
 }
 
 #[test]
-fn degenerate_r1_gives_no_servovalve_and_diagnose_refuses() {
+fn degenerate_r1_gives_no_servovalve_and_diagnose_uses_the_closed_loop() {
     let mut c = small("R1,R2", 8);
     let r = rec(&mut c, "R1");
     r.valve_command.iter_mut().flatten().for_each(|x| *x = 0.0);
@@ -163,9 +163,16 @@ fn degenerate_r1_gives_no_servovalve_and_diagnose_refuses() {
         .missing
         .iter()
         .any(|m| m.contains("R1") && m.contains("R1.csv")));
-    let d = shaketable::diagnose::diagnose(&c, None);
-    let e = d.err().expect("refused");
-    assert!(e.contains("servovalve"), "{e}");
+    // the closed-loop fit of the motion stands in for the valve section 4 could not give,
+    // and the diagnosis runs on it. (What it names here is not asserted: on 8 s of one
+    // usable test the closed-loop baseline stays 7-20 floor RMS off, and stick-slip, whose
+    // fit gives no covariance to judge it by, absorbs part of that; the note of issue 16
+    // says so.)
+    assert!(id.closed_loop.is_some(), "{:?}", id.missing);
+    let d = shaketable::diagnose::diagnose(&c, None).unwrap_or_else(|e| panic!("{e}"));
+    assert!(d.baseline_from().starts_with("closed-loop fit"));
+    assert!(d.baseline_from().contains("servovalve"));
+    assert!(d.gain.is_finite(), "{}", d.gain);
 }
 
 #[test]

@@ -336,7 +336,13 @@ pub(super) fn scored_candidate(
             .collect()
     };
     let parameters = keyed(fitted.theta);
-    let sigma = keyed(fitted.sigma);
+    // a sigma the fit could not compute stays, as NaN: it is no evidence
+    let sigma: BTreeMap<String, f64> = e
+        .parameters()
+        .iter()
+        .zip(fitted.sigma)
+        .map(|(k, x)| (k.to_string(), *x))
+        .collect();
     let (lower, upper) = fitted.bounds;
     let why = not_evidence(e, &parameters, &sigma, lower, upper);
     Candidate {

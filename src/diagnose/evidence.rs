@@ -15,8 +15,8 @@ pub const EVIDENCE_SIGMAS: f64 = 2.0;
 /// estimate. One in a thousand is well below any fit's precision here (percents).
 const AT_BOUND_FRACTION: f64 = 1e-3;
 
-/// Why the fitted `parameters` (with their one-sigma `sigma`, where the fit gives them)
-/// of `effect` are not evidence of it, fitted within `lower..upper` (one per parameter
+/// Why the fitted `parameters` (with their one-sigma `sigma`, where the fit gives them;
+/// NaN where it could not) of `effect` are not evidence of it, fitted within `lower..upper` (one per parameter
 /// in declaration order), if they are not; `None` when they are.
 pub(super) fn not_evidence(
     effect: Effect,
@@ -36,11 +36,21 @@ pub(super) fn not_evidence(
             ));
         }
     }
+    // every effect's parameter, whether or not it has a no-effect value (a flow limit's
+    // is infinite)
+    for key in effect.parameters() {
+        if sigma.get(key).is_some_and(|s| !s.is_finite()) {
+            return Some(format!(
+                "{}.{key} has no uncertainty: the fit's covariance is singular (the recorded channels do not separate the parameters it frees, e.g. the mass from the oil column without a force channel), so the data's support for it is unknown",
+                effect.name()
+            ));
+        }
+    }
     for &(key, none) in effect.no_effect() {
         let (Some(&x), Some(&s)) = (parameters.get(key), sigma.get(key)) else {
             continue;
         };
-        if s.is_finite() && (x - none).abs() <= EVIDENCE_SIGMAS * s {
+        if (x - none).abs() <= EVIDENCE_SIGMAS * s {
             return Some(format!(
                 "{}.{key} = {x:.4e} +- {s:.2e} (1 sigma) is within {EVIDENCE_SIGMAS} sigma of {none}, where the effect vanishes",
                 effect.name()
@@ -120,10 +130,19 @@ mod tests {
             ),
             None
         );
-        // no sigma (a fit without covariance): only the bounds judge
+        // no sigma (a fit that gives none, as stick-slip's): only the bounds judge
         assert_eq!(
             not_evidence(Effect::ValveDeadband, &weak, &map(&[]), &lo, &hi),
             None
         );
+        // a sigma the fit could not compute (singular covariance) is no evidence
+        let why = not_evidence(
+            Effect::ValveDeadband,
+            &strong,
+            &map(&[("deadband", f64::NAN)]),
+            &lo,
+            &hi,
+        );
+        assert!(why.unwrap().contains("singular"));
     }
 }

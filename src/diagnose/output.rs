@@ -171,6 +171,31 @@ impl Diagnosis {
         self.causes.first().map(|c| c.effect)
     }
 
+    /// Where the baseline came from: section 4's estimates, or the closed-loop fit of the
+    /// recorded motion when section 4 could not give every part or the gains are unknown
+    /// (issue 16 part 3), with what section 4 lacked.
+    pub fn baseline_from(&self) -> String {
+        let id = &self.identification;
+        if id.closed_loop.is_none() {
+            return "section 4 estimates (refined by output error)".into();
+        }
+        let lacked: Vec<&str> = [
+            (id.servovalve.is_none(), "servovalve"),
+            (id.mass_kg.is_none(), "mass"),
+            (id.oil_column.is_none(), "oil column"),
+            (id.friction.is_none(), "friction"),
+        ]
+        .iter()
+        .filter(|(absent, _)| *absent)
+        .map(|(_, what)| *what)
+        .chain(id.unknown_inputs.iter().copied())
+        .collect();
+        format!(
+            "closed-loop fit of the recorded motion (refined by output error); section 4 could not give: {}",
+            lacked.join(", ")
+        )
+    }
+
     /// The JSON of issue 6 (fixed keys), with issue 17's `causes`, `partial` and
     /// `unexplained`.
     pub fn to_json(&self) -> serde_json::Value {
@@ -244,6 +269,8 @@ impl Diagnosis {
                 "select": "third quarter of every test: missed cells, ranking, polishing, actuator variant, acceptance, whether to search again",
                 "report": "last quarter of every test: gain, explained and unexplained only",
             },
+            "baseline_from": self.baseline_from(),
+            "closed_loop": self.identification.closed_loop,
             "baseline_structure": {
                 "servovalve": self.valve_model.name(),
                 "actuator": self.actuator_model.name(),

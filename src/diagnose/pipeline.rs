@@ -230,8 +230,11 @@ impl Diagnoser<'_> {
             POLISH_ITERATIONS,
         )?;
         let theta = from.effect.read(&r.params);
-        // the stick-slip polish holds the effect: its uncertainty is the fit's own
-        let sigma: Vec<f64> = if r.effect_sigma.is_empty() {
+        // the stick-slip polish holds the effect: its uncertainty is the fit's own (none
+        // for stick-slip's, whose fit gives none)
+        let sigma: Vec<f64> = if r.effect_sigma.is_empty() && from.sigma.is_empty() {
+            Vec::new()
+        } else if r.effect_sigma.is_empty() {
             from.effect
                 .parameters()
                 .iter()

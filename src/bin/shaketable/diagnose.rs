@@ -79,6 +79,7 @@ pub fn run(args: Args) -> anyhow::Result<()> {
         args.campaign.display(),
         t0.elapsed().as_secs_f64()
     );
+    println!("baseline from the {}", d.baseline_from());
     println!(
         "baseline: servovalve {}, actuator {}; noise floor from {}",
         d.valve_model.name(),
