@@ -92,15 +92,7 @@ fn baseline_gaps(c: &Campaign, id: &Identification) -> Option<String> {
     if id.closed_loop.is_some() {
         return None;
     }
-    let mut gaps: Vec<String> = [
-        (id.servovalve.is_none(), "servovalve"),
-        (id.mass_kg.is_none(), "mass"),
-        (id.friction.is_none(), "Bouc-Wen friction"),
-        (id.oil_column.is_none(), "oil column"),
-    ]
-    .into_iter()
-    .filter_map(|(m, n)| m.then(|| n.to_string()))
-    .collect();
+    let mut gaps: Vec<String> = id.section4_gaps().into_iter().map(String::from).collect();
     if let Err(e) = c.gains_known() {
         gaps.push(format!("controller gains ({e})"));
     }

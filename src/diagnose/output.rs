@@ -179,17 +179,11 @@ impl Diagnosis {
         if id.closed_loop.is_none() {
             return "section 4 estimates (refined by output error)".into();
         }
-        let lacked: Vec<&str> = [
-            (id.servovalve.is_none(), "servovalve"),
-            (id.mass_kg.is_none(), "mass"),
-            (id.oil_column.is_none(), "oil column"),
-            (id.friction.is_none(), "friction"),
-        ]
-        .iter()
-        .filter(|(absent, _)| *absent)
-        .map(|(_, what)| *what)
-        .chain(id.unknown_inputs.iter().copied())
-        .collect();
+        let lacked: Vec<&str> = id
+            .section4_gaps()
+            .into_iter()
+            .chain(id.unknown_inputs.iter().copied())
+            .collect();
         format!(
             "closed-loop fit of the recorded motion (refined by output error); section 4 could not give: {}",
             lacked.join(", ")

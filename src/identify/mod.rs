@@ -432,6 +432,20 @@ fn final_mass(random: Option<&MassFit>, periodic: Option<&PeriodicMassFit>) -> O
 }
 
 impl Identification {
+    /// The parts of the model section 4 could not identify (each would otherwise be a
+    /// default, which a diagnosis must not extend).
+    pub fn section4_gaps(&self) -> Vec<&'static str> {
+        [
+            (self.servovalve.is_none(), "servovalve"),
+            (self.mass_kg.is_none(), "mass"),
+            (self.friction.is_none(), "Bouc-Wen friction"),
+            (self.oil_column.is_none(), "oil column"),
+        ]
+        .into_iter()
+        .filter_map(|(absent, name)| absent.then_some(name))
+        .collect()
+    }
+
     /// The JSON of issue 5 (nested objects, fixed keys) with an `uncertainty` object.
     pub fn to_json(&self) -> serde_json::Value {
         use serde_json::{json, Map, Value};
