@@ -97,6 +97,20 @@ fn diagnose(dir: &Path) -> serde_json::Value {
     serde_json::from_str(&std::fs::read_to_string(&json).unwrap()).unwrap()
 }
 
+/// The diagnosis `d` ran on the closed-loop fit, which stood in for `lacked`.
+fn assert_closed_loop_baseline(d: &serde_json::Value, lacked: &str) {
+    let from = d["baseline_from"].as_str().unwrap();
+    assert!(
+        from.starts_with("closed-loop") && from.contains(lacked),
+        "{from}"
+    );
+    assert!(
+        d["closed_loop"]["estimates"].is_array(),
+        "{}",
+        d["closed_loop"]
+    );
+}
+
 /// A 20-t specimen at 6 Hz on a table whose valve command and spool were not recorded:
 /// the closed-loop fit is the baseline, and the specimen is named with its frequency
 /// within the hidden suite's 5 % and its mass within 15 % (the valve's dynamics, which
@@ -114,16 +128,7 @@ fn a_specimen_is_found_without_the_valve_channels() {
     recorded_only(&dir, &[&REFERENCE[..], &table[..]].concat(), true);
     let d = diagnose(&dir);
     // section 4 had no valve command to fit the valve on: the closed loop stands in
-    let from = d["baseline_from"].as_str().unwrap();
-    assert!(
-        from.starts_with("closed-loop") && from.contains("servovalve"),
-        "{from}"
-    );
-    assert!(
-        d["closed_loop"]["estimates"].is_array(),
-        "{}",
-        d["closed_loop"]
-    );
+    assert_closed_loop_baseline(&d, "servovalve");
     eprintln!("causes {}", d["causes"]);
     assert_eq!(d["cause"], "specimen", "{}", d["causes"]);
     let p = &d["parameters"];
@@ -149,11 +154,7 @@ fn displacement_alone_names_what_it_cannot_test() {
         false,
     );
     let d = diagnose(&dir);
-    let from = d["baseline_from"].as_str().unwrap();
-    assert!(
-        from.starts_with("closed-loop") && from.contains("controller."),
-        "{from}"
-    );
+    assert_closed_loop_baseline(&d, "controller.");
     eprintln!(
         "displacement alone: cause {}, explained {}, not testable {}",
         d["cause"], d["explained"], d["not_testable"]

@@ -252,28 +252,20 @@ fn cli_exit_codes() {
     }
     write_campaign(&c, &dir).unwrap();
     let run = |args: &[&str]| std::process::Command::new(bin).args(args).output().unwrap();
+    // exit 0 and the standard output
+    let succeeds = |args: &[&str]| {
+        let o = run(args);
+        let err = String::from_utf8_lossy(&o.stderr).into_owned();
+        assert_eq!(o.status.code(), Some(0), "{args:?}: {err}");
+        String::from_utf8_lossy(&o.stdout).into_owned()
+    };
     let d = dir.to_str().unwrap();
-    let o = run(&["identify", d]);
-    let out = String::from_utf8_lossy(&o.stdout);
-    assert_eq!(
-        o.status.code(),
-        Some(0),
-        "{}",
-        String::from_utf8_lossy(&o.stderr)
-    );
+    let out = succeeds(&["identify", d]);
     assert!(out.contains("R2 (R2.csv), force_n"), "{out}");
-    let o = run(&["campaign", "check", d]);
-    let out = String::from_utf8_lossy(&o.stdout);
-    assert!(out.contains("screening: R2 (R2.csv), force_n"), "{out}");
-    let o = run(&["diagnose", d, "--quiet"]);
-    let out = String::from_utf8_lossy(&o.stdout);
-    assert_eq!(
-        o.status.code(),
-        Some(0),
-        "{}",
-        String::from_utf8_lossy(&o.stderr)
-    );
-    assert!(out.contains("screening: R2 (R2.csv), force_n"), "{out}");
+    for args in [&["campaign", "check", d][..], &["diagnose", d, "--quiet"]] {
+        let out = succeeds(args);
+        assert!(out.contains("screening: R2 (R2.csv), force_n"), "{out}");
+    }
     std::fs::remove_file(dir.join("S3.csv")).unwrap();
     let o = run(&["diagnose", d, "--quiet"]);
     assert_eq!(o.status.code(), Some(1));

@@ -65,6 +65,17 @@ pub(super) struct Hold<'a> {
 /// Polishing rounds (of 6 output-error iterations) of the best candidate at most.
 pub(super) const POLISH_ROUNDS: usize = 3;
 
+/// Smallest share of the identified table mass a specimen's start leaves to the table
+/// when it takes its own mass out: the identified mass holds the specimen's, but a start
+/// mass far above the table's would leave a table lighter than any that carries one (a
+/// specimen is at most a few times the table's mass; the fit moves on from there).
+const MIN_TABLE_MASS_SHARE: f64 = 0.3;
+
+/// A foundation's start stiffens the oil column only when its spring is this many times
+/// stiffer than the identified (series) column: closer, `k_f / (k_f - k_id)` grows without
+/// bound, and the identified column then is mostly the foundation's, not the oil's.
+const FOUNDATION_SERIES_MARGIN: f64 = 1.5;
+
 /// A start of a candidate's fit: the effect's and the free baseline parameters, and the
 /// parameters the other baseline parameters are taken from.
 pub(super) type Start = (Vec<f64>, Params);
@@ -172,14 +183,14 @@ pub(super) fn fit_candidate(
         if e == Effect::Specimen {
             // the identified mass holds the specimen's mass at low frequency
             let m = fixed.table.mass_kg;
-            fixed.table.mass_kg = (m - s[0]).max(0.3 * m);
+            fixed.table.mass_kg = (m - s[0]).max(MIN_TABLE_MASS_SHARE * m);
         }
         if e == Effect::Foundation {
             // the identified oil column is the oil and the foundation springs in
             // series: 1/k_id = 1/k_oil + 1/k_f, so the oil alone is stiffer
             let k_id = b.actuator.oil_column_stiffness_n_m();
             let k_f = s[0] * (2.0 * std::f64::consts::PI * s[1]).powi(2);
-            if k_f > 1.5 * k_id {
+            if k_f > FOUNDATION_SERIES_MARGIN * k_id {
                 fixed.actuator.bulk_modulus_pa *= k_f / (k_f - k_id);
             }
         }
@@ -336,7 +347,7 @@ pub(super) fn scored_candidate(
             .collect()
     };
     let parameters = keyed(fitted.theta);
-    // a sigma the fit could not compute stays, as NaN: it is no evidence
+    // a sigma the data cannot bound stays (infinite or NaN): it is no evidence
     let sigma: BTreeMap<String, f64> = e
         .parameters()
         .iter()

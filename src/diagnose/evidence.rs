@@ -16,7 +16,7 @@ pub const EVIDENCE_SIGMAS: f64 = 2.0;
 const AT_BOUND_FRACTION: f64 = 1e-3;
 
 /// Why the fitted `parameters` (with their one-sigma `sigma`, where the fit gives them;
-/// NaN where it could not) of `effect` are not evidence of it, fitted within `lower..upper` (one per parameter
+/// infinite where the data cannot fix one) of `effect` are not evidence of it, fitted within `lower..upper` (one per parameter
 /// in declaration order), if they are not; `None` when they are.
 pub(super) fn not_evidence(
     effect: Effect,
@@ -41,7 +41,7 @@ pub(super) fn not_evidence(
     for key in effect.parameters() {
         if sigma.get(key).is_some_and(|s| !s.is_finite()) {
             return Some(format!(
-                "{}.{key} has no uncertainty: the fit's covariance is singular (the recorded channels do not separate the parameters it frees, e.g. the mass from the oil column without a force channel), so the data's support for it is unknown",
+                "{}.{key} is not fixed by the data: it lies along a null direction of the fit (it does not change the residual, or only together with other parameters it frees, e.g. a flow limit that never binds), so its uncertainty is unbounded",
                 effect.name()
             ));
         }
@@ -135,14 +135,14 @@ mod tests {
             not_evidence(Effect::ValveDeadband, &weak, &map(&[]), &lo, &hi),
             None
         );
-        // a sigma the fit could not compute (singular covariance) is no evidence
+        // a parameter the data cannot fix (infinite sigma) is no evidence
         let why = not_evidence(
             Effect::ValveDeadband,
             &strong,
-            &map(&[("deadband", f64::NAN)]),
+            &map(&[("deadband", f64::INFINITY)]),
             &lo,
             &hi,
         );
-        assert!(why.unwrap().contains("singular"));
+        assert!(why.unwrap().contains("null direction"));
     }
 }

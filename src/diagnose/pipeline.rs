@@ -4,20 +4,15 @@
 //! cells; then searches for causes, one effect at a time, until none passes.
 
 use super::baseline::{refine_output_error, BASELINE_ITERATIONS};
-use super::candidates::{
-    fit_candidate, heldout_scores, scored_candidate, Fitted, Hold, POLISH_ROUNDS,
-};
+use super::candidates::{fit_candidate, scored_candidate, Fitted, Hold, POLISH_ROUNDS};
 use super::effect::{Effect, EFFECTS};
-use super::locate::unexplained_cells;
 use super::missed::Missed;
-use super::output::{Candidate, Cause, Diagnosis, PartRows, Partial};
+use super::output::{Candidate, PartRows};
 use super::part::Part;
-use super::residuals::{estimate_noise, ratios, simulate_test, Cells, NoiseFloor, Whitening};
+use super::residuals::{ratios, simulate_test, Cells, NoiseFloor, Whitening};
 use super::{trace_enabled, unphysical, Progress, EXPLAINED_RATIO, REQUIRED_GAIN};
-use crate::campaign::{Campaign, Record};
+use crate::campaign::Campaign;
 use crate::identify::lsq::LsqOptions;
-use crate::identify::spool::refine_servovalve;
-use crate::identify::Identification;
 use crate::params::{ActuatorModel, Params};
 use rayon::prelude::*;
 
@@ -407,167 +402,8 @@ fn verdict(best: &Candidate, current_score: f64, table_mass_kg: f64) -> Verdict 
     }
 }
 
-/// Diagnose the screened campaign `c` from its baseline identification `id`.
-pub(super) fn diagnose_with(
-    c: &Campaign,
-    id: Identification,
-    progress: Option<Progress>,
-) -> Diagnosis {
-    if let Some(p) = progress {
-        p(0, PROGRESS_SETUP + SEARCH_STEPS, "identifying the baseline");
-    }
-    let noise = estimate_noise(c);
-    let mut base = id.params;
-    // the valve by output error on the spool channel (fitting halves)
-    let rated: Vec<(&Record, f64)> = (0..c.records.len())
-        .map(|i| (&c.records[i], c.sample_rate_of(i)))
-        .collect();
-    if let Some(v) = refine_servovalve(&base.servovalve, &rated, |n| Part::Fit.range(n)) {
-        base.servovalve = v;
-    }
-    let spool_valve = base.servovalve;
-    let tests: Vec<usize> = (0..c.info.tests.len()).collect();
-    let (testable, not_testable): (Vec<_>, Vec<_>) = EFFECTS
-        .into_iter()
-        .map(|e| (e, e.testable(c)))
-        .partition(|(_, t)| t.is_ok());
-    let whitening = Whitening::new(&base, c, &tests, &noise, Part::Fit);
-    let mut d = Diagnoser {
-        c,
-        noise,
-        whitening,
-        table: base,
-        tests,
-        report_missed: Missed::default(),
-        testable: testable.into_iter().map(|(e, _)| e).collect(),
-        progress,
-    };
-    d.tick(
-        1,
-        PROGRESS_SETUP + SEARCH_STEPS,
-        "refining the baseline by output error",
-    );
-    let (base, actuator_costs) = d.refine_both_variants(base);
-    d.table = base;
-    let baseline_rows = d.baseline_rows(&base);
-    let (baseline_select, baseline_report) = heldout_scores(&base, c, &d.tests, &d.noise, None);
-    d.report_missed = Missed::of(&baseline_report.residual);
-    let baseline_heldout = d.report_missed.rms(&baseline_report.residual);
-    let baseline_score = Missed::of(&baseline_select.residual).rms(&baseline_select.score);
-    // candidates start from the section-4 estimates too (the output-error baseline has
-    // bent its parameters to absorb the missing effect) with the chosen actuator and the
-    // valve fitted on the spool (the refinement may have bent its dynamics too)
-    let mut section4 = id.params;
-    section4.actuator.model = base.actuator.model;
-    section4.servovalve = spool_valve;
-    let mut current = Current {
-        params: base,
-        section4,
-        select: baseline_select.clone(),
-        report: baseline_report.clone(),
-    };
-    let (mut causes, mut partial) = (Vec::new(), Vec::new());
-    let mut first_candidates = Vec::new();
-    let mut cause_rejected = None;
-    let mut searched = d.testable.clone();
-    for round in 0..MAX_CAUSES {
-        let Some((candidates, k, missed)) = d.search(&current, &searched, round) else {
-            break;
-        };
-        let best = candidates[k].clone();
-        if round == 0 {
-            first_candidates = candidates;
-        }
-        // every effect not yet accepted is fitted again: a second effect's first candidate
-        // may not beat the baseline at all while the dominant effect is missing (a
-        // specimen's fit with a deadband unmodelled ends at its damping bound; stick-slip's
-        // with a specimen unmodelled does not improve the baseline)
-        searched.retain(|&e| e != best.effect);
-        let current_score = missed.rms(&current.select.score);
-        match verdict(&best, current_score, base.table.mass_kg) {
-            Verdict::Cause => {
-                // the next search must not credit its candidates with what this model's
-                // own parameters still had to settle
-                let best = if round + 1 < MAX_CAUSES && Missed::of(&best.select.residual).any {
-                    let hold = current.hold();
-                    d.settle(best, &missed, &hold)
-                } else {
-                    best
-                };
-                let before = d.report_missed.rms(&current.report.residual);
-                causes.push(Cause {
-                    effect: best.effect,
-                    parameters: best.parameters.clone(),
-                    sigma: best.sigma.clone(),
-                    gain: before / best.report_residual,
-                });
-                let mut section4 = current.section4;
-                best.effect
-                    .apply(&mut section4, &best.effect.read(&best.params));
-                current = Current {
-                    params: best.params,
-                    section4,
-                    select: best.select,
-                    report: best.report,
-                };
-            }
-            Verdict::Partial(why) => {
-                if round == 0 && unphysical(&best, base.table.mass_kg).is_some() {
-                    cause_rejected = Some(why.clone());
-                }
-                partial.push(Partial {
-                    effect: best.effect,
-                    parameters: best.parameters.clone(),
-                    selection_gain: current_score / best.score,
-                    why_not_a_cause: why,
-                });
-                break;
-            }
-            Verdict::NoGain => break,
-        }
-    }
-    let extended = current.params;
-    let extended_heldout = d.report_missed.rms(&current.report.residual);
-    let explained = d.report_missed.all_explained_by(&current.report.residual);
-    let unexplained = if explained {
-        Vec::new()
-    } else {
-        unexplained_cells(
-            &extended,
-            c,
-            &current.report,
-            &d.report_missed.cells,
-            &d.noise,
-        )
-    };
-    Diagnosis {
-        baseline: base,
-        baseline_rows,
-        baseline_select,
-        baseline_report,
-        baseline_heldout,
-        baseline_score,
-        candidates: first_candidates,
-        causes,
-        partial,
-        not_testable: not_testable
-            .into_iter()
-            .filter_map(|(_, t)| t.err())
-            .collect(),
-        cause_rejected,
-        explained,
-        gain: baseline_heldout / extended_heldout,
-        extended_heldout,
-        extended,
-        unexplained,
-        tests: c.info.tests.iter().map(|t| t.name.clone()).collect(),
-        valve_model: id.params.servovalve.model,
-        actuator_model: base.actuator.model,
-        actuator_costs,
-        noise: d.noise,
-        identification: id,
-    }
-}
+mod rounds;
+pub(super) use rounds::diagnose_with;
 
 #[cfg(test)]
 mod tests;

@@ -38,7 +38,8 @@ pub struct LsqFit {
     /// Sum of squared residuals at `theta`.
     pub cost: f64,
     pub residuals: usize,
-    /// One-sigma uncertainty of each parameter from `s^2 (J^T J)^-1`, NaN when singular.
+    /// One-sigma uncertainty of each parameter from `s^2 (J^T J)^-1`; when that is
+    /// singular, infinite for a parameter the data cannot fix ([`singular_sigma`]).
     pub sigma: Vec<f64>,
     /// `s^2 (J^T J)^-1`, `None` when singular.
     pub covariance: Option<DMatrix<f64>>,
@@ -183,15 +184,48 @@ impl LsqFit {
     }
 }
 
+/// Eigenvalues of `J^T J` below this fraction of the largest are a null direction: the
+/// matrix is singular only when a column is exactly zero or exactly dependent (a limit
+/// that does not bind, a parameter the channels do not reach), which leaves eigenvalues at
+/// rounding level, 1e-16 of the largest; 1e-12 keeps a margin above that.
+const NULL_EIGENVALUE: f64 = 1e-12;
+
+/// A parameter whose squared share of a null direction exceeds this is not identified.
+const NULL_SHARE: f64 = 1e-6;
+
+/// One-sigma uncertainties from a singular `J^T J` (scaled by `s2`): infinite for a
+/// parameter that takes part in a null direction (the data cannot fix it), and from the
+/// pseudo-inverse for the others, whose estimates the null directions do not touch (a
+/// flow limit that never binds leaves the other parameters' uncertainties defined).
+fn singular_sigma(jtj: DMatrix<f64>, s2: f64) -> Vec<f64> {
+    let n = jtj.nrows();
+    let eig = nalgebra::SymmetricEigen::new(jtj);
+    let largest = eig.eigenvalues.iter().fold(0.0f64, |m, v| m.max(v.abs()));
+    let null = |j: usize| !(eig.eigenvalues[j] > NULL_EIGENVALUE * largest);
+    (0..n)
+        .map(|i| {
+            let v = |j: usize| eig.eigenvectors[(i, j)].powi(2);
+            if (0..n).filter(|&j| null(j)).map(v).sum::<f64>() > NULL_SHARE {
+                return f64::INFINITY;
+            }
+            let var: f64 = (0..n)
+                .filter(|&j| !null(j))
+                .map(|j| v(j) / eig.eigenvalues[j])
+                .sum();
+            (s2 * var).sqrt()
+        })
+        .collect()
+}
+
 fn finish(theta: Vec<f64>, cost: f64, m: usize, jm: &DMatrix<f64>, iterations: usize) -> LsqFit {
     let n = theta.len();
     let dof = (m as f64 - n as f64).max(1.0);
     let s2 = cost / dof;
     let jtj = jm.transpose() * jm;
-    let covariance = jtj.try_inverse().map(|inv| inv * s2);
+    let covariance = jtj.clone().try_inverse().map(|inv| inv * s2);
     let sigma = match &covariance {
         Some(cov) => (0..n).map(|i| cov[(i, i)].max(0.0).sqrt()).collect(),
-        None => vec![f64::NAN; n],
+        None => singular_sigma(jtj, s2),
     };
     LsqFit {
         theta,
@@ -229,6 +263,44 @@ pub fn linear(a: &DMatrix<f64>, b: &DVector<f64>) -> Option<(DVector<f64>, Vec<f
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// A singular `J^T J` (one parameter that never reaches the residual): that one's
+    /// sigma is infinite, the others' are those of the fit without it.
+    #[test]
+    fn a_parameter_the_data_cannot_fix_has_infinite_sigma() {
+        let t: Vec<f64> = (0..40).map(|i| i as f64).collect();
+        // residuals of a line `a + b t` against noisy data, and a third column of zeros
+        let noise = |i: usize| 0.1 * ((i * 7919) % 13) as f64 / 13.0 - 0.05;
+        let r = |p: &[f64; 3]| -> Vec<f64> {
+            t.iter()
+                .enumerate()
+                .map(|(i, t)| p[0] + p[1] * t - (1.0 + 0.5 * t + noise(i)) + 0.0 * p[2])
+                .collect()
+        };
+        let jac = |p: [f64; 3]| {
+            let r0 = r(&p);
+            DMatrix::from_fn(t.len(), 3, |i, j| {
+                let mut q = p;
+                q[j] += 1e-6;
+                (r(&q)[i] - r0[i]) / 1e-6
+            })
+        };
+        let p = [1.0, 0.5, 0.0];
+        let s2 = r(&p).iter().map(|x| x * x).sum::<f64>() / 37.0;
+        let jm = jac(p);
+        let sigma = singular_sigma(jm.transpose() * &jm, s2);
+        assert!(sigma[2].is_infinite(), "{sigma:?}");
+        let reduced = jm.columns(0, 2).into_owned();
+        let cov = (reduced.transpose() * &reduced).try_inverse().unwrap() * s2;
+        for i in 0..2 {
+            let want = cov[(i, i)].sqrt();
+            assert!(
+                (sigma[i] / want - 1.0).abs() < 1e-6,
+                "{i}: {} vs {want}",
+                sigma[i]
+            );
+        }
+    }
 
     /// Fit `y = a exp(-b t)` to exact data from a poor start.
     #[test]

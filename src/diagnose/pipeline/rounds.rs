@@ -1,0 +1,232 @@
+//! One diagnosis from end to end ([`diagnose_with`]): the baseline set up and refined,
+//! the searches for causes until none passes, and the result assembled.
+
+use super::{verdict, Current, Diagnoser, Verdict};
+use super::{MAX_CAUSES, PROGRESS_SETUP, SEARCH_STEPS};
+use crate::campaign::{Campaign, Record};
+use crate::diagnose::candidates::heldout_scores;
+use crate::diagnose::effect::EFFECTS;
+use crate::diagnose::locate::unexplained_cells;
+use crate::diagnose::missed::Missed;
+use crate::diagnose::output::{Candidate, Cause, Diagnosis, Partial};
+use crate::diagnose::part::Part;
+use crate::diagnose::residuals::{estimate_noise, Whitening};
+use crate::diagnose::{unphysical, Progress};
+use crate::identify::spool::refine_servovalve;
+use crate::identify::Identification;
+use crate::params::{Params, Servovalve};
+
+/// What the searches found: the causes in order of acceptance, the partial explanation
+/// that stopped them (if one did), the first search's candidates, why the first search's
+/// best was rejected as unphysical (if it was), and the model with every cause in place.
+struct Found {
+    causes: Vec<Cause>,
+    partial: Vec<Partial>,
+    first_candidates: Vec<Candidate>,
+    cause_rejected: Option<String>,
+    current: Current,
+}
+
+/// Diagnose the screened campaign `c` from its baseline identification `id`.
+pub(in crate::diagnose) fn diagnose_with(
+    c: &Campaign,
+    id: Identification,
+    progress: Option<Progress>,
+) -> Diagnosis {
+    if let Some(p) = progress {
+        p(0, PROGRESS_SETUP + SEARCH_STEPS, "identifying the baseline");
+    }
+    let (mut d, spool_valve, not_testable) = Diagnoser::new(c, &id, progress);
+    d.tick(
+        1,
+        PROGRESS_SETUP + SEARCH_STEPS,
+        "refining the baseline by output error",
+    );
+    let (base, actuator_costs) = d.refine_both_variants(d.table);
+    d.table = base;
+    let baseline_rows = d.baseline_rows(&base);
+    let (baseline_select, baseline_report) = heldout_scores(&base, c, &d.tests, &d.noise, None);
+    d.report_missed = Missed::of(&baseline_report.residual);
+    let baseline_heldout = d.report_missed.rms(&baseline_report.residual);
+    let baseline_score = Missed::of(&baseline_select.residual).rms(&baseline_select.score);
+    // candidates start from the section-4 estimates too (the output-error baseline has
+    // bent its parameters to absorb the missing effect) with the chosen actuator and the
+    // valve fitted on the spool (the refinement may have bent its dynamics too)
+    let mut section4 = id.params;
+    section4.actuator.model = base.actuator.model;
+    section4.servovalve = spool_valve;
+    let found = d.search_causes(Current {
+        params: base,
+        section4,
+        select: baseline_select.clone(),
+        report: baseline_report.clone(),
+    });
+    let current = found.current;
+    let extended = current.params;
+    let extended_heldout = d.report_missed.rms(&current.report.residual);
+    let explained = d.report_missed.all_explained_by(&current.report.residual);
+    let unexplained = if explained {
+        Vec::new()
+    } else {
+        unexplained_cells(
+            &extended,
+            c,
+            &current.report,
+            &d.report_missed.cells,
+            &d.noise,
+        )
+    };
+    Diagnosis {
+        baseline: base,
+        baseline_rows,
+        baseline_select,
+        baseline_report,
+        baseline_heldout,
+        baseline_score,
+        candidates: found.first_candidates,
+        causes: found.causes,
+        partial: found.partial,
+        not_testable,
+        cause_rejected: found.cause_rejected,
+        explained,
+        gain: baseline_heldout / extended_heldout,
+        extended_heldout,
+        extended,
+        unexplained,
+        tests: c.info.tests.iter().map(|t| t.name.clone()).collect(),
+        valve_model: id.params.servovalve.model,
+        actuator_model: base.actuator.model,
+        actuator_costs,
+        noise: d.noise,
+        identification: id,
+    }
+}
+
+impl<'a> Diagnoser<'a> {
+    /// Set up for `c` from `id`: the noise, the valve refitted by output error on the
+    /// spool channel (fitting halves; `id`'s valve when no spool was recorded), the
+    /// whitening, and the effects the recorded channels can show. Returns the diagnoser
+    /// (its table not yet refined), the spool-fitted valve, and why the other effects
+    /// are not testable.
+    fn new(
+        c: &'a Campaign,
+        id: &Identification,
+        progress: Option<Progress<'a>>,
+    ) -> (Self, Servovalve, Vec<String>) {
+        let noise = estimate_noise(c);
+        let mut base: Params = id.params;
+        let rated: Vec<(&Record, f64)> = (0..c.records.len())
+            .map(|i| (&c.records[i], c.sample_rate_of(i)))
+            .collect();
+        if let Some(v) = refine_servovalve(&base.servovalve, &rated, |n| Part::Fit.range(n)) {
+            base.servovalve = v;
+        }
+        let tests: Vec<usize> = (0..c.info.tests.len()).collect();
+        let (testable, not_testable): (Vec<_>, Vec<_>) = EFFECTS
+            .into_iter()
+            .map(|e| (e, e.testable(c)))
+            .partition(|(_, t)| t.is_ok());
+        let whitening = Whitening::new(&base, c, &tests, &noise, Part::Fit);
+        let d = Diagnoser {
+            c,
+            noise,
+            whitening,
+            table: base,
+            tests,
+            report_missed: Missed::default(),
+            testable: testable.into_iter().map(|(e, _)| e).collect(),
+            progress,
+        };
+        let why_not = not_testable
+            .into_iter()
+            .filter_map(|(_, t)| t.err())
+            .collect();
+        (d, base.servovalve, why_not)
+    }
+
+    /// Searches on top of `current` until no candidate passes ([`verdict`]), no cell is
+    /// missed or [`MAX_CAUSES`] are accepted. Every effect not yet accepted is fitted
+    /// again in each search: a second effect's first candidate may not beat the baseline
+    /// at all while the dominant effect is missing (a specimen's fit with a deadband
+    /// unmodelled ends at its damping bound; stick-slip's with a specimen unmodelled does
+    /// not improve the baseline).
+    fn search_causes(&self, mut current: Current) -> Found {
+        let table_mass_kg = self.table.table.mass_kg;
+        let (mut causes, mut partial) = (Vec::new(), Vec::new());
+        let mut first_candidates = Vec::new();
+        let mut cause_rejected = None;
+        let mut searched = self.testable.clone();
+        for round in 0..MAX_CAUSES {
+            let Some((candidates, k, missed)) = self.search(&current, &searched, round) else {
+                break;
+            };
+            let best = candidates[k].clone();
+            if round == 0 {
+                first_candidates = candidates;
+            }
+            searched.retain(|&e| e != best.effect);
+            let current_score = missed.rms(&current.select.score);
+            match verdict(&best, current_score, table_mass_kg) {
+                Verdict::Cause => {
+                    let (cause, extended) = self.accept(best, &current, &missed, round);
+                    causes.push(cause);
+                    current = extended;
+                }
+                Verdict::Partial(why) => {
+                    if round == 0 && unphysical(&best, table_mass_kg).is_some() {
+                        cause_rejected = Some(why.clone());
+                    }
+                    partial.push(Partial {
+                        effect: best.effect,
+                        parameters: best.parameters.clone(),
+                        selection_gain: current_score / best.score,
+                        why_not_a_cause: why,
+                    });
+                    break;
+                }
+                Verdict::NoGain => break,
+            }
+        }
+        Found {
+            causes,
+            partial,
+            first_candidates,
+            cause_rejected,
+            current,
+        }
+    }
+
+    /// `best`, a cause on top of `current`, settled when a further search will follow (the
+    /// next search must not credit its candidates with what this model's own parameters
+    /// still had to settle): the cause with its report-quarter gain, and the model it makes.
+    fn accept(
+        &self,
+        best: Candidate,
+        current: &Current,
+        missed: &Missed,
+        round: usize,
+    ) -> (Cause, Current) {
+        let best = if round + 1 < MAX_CAUSES && Missed::of(&best.select.residual).any {
+            self.settle(best, missed, &current.hold())
+        } else {
+            best
+        };
+        let before = self.report_missed.rms(&current.report.residual);
+        let cause = Cause {
+            effect: best.effect,
+            parameters: best.parameters.clone(),
+            sigma: best.sigma.clone(),
+            gain: before / best.report_residual,
+        };
+        let mut section4 = current.section4;
+        best.effect
+            .apply(&mut section4, &best.effect.read(&best.params));
+        let extended = Current {
+            params: best.params,
+            section4,
+            select: best.select,
+            report: best.report,
+        };
+        (cause, extended)
+    }
+}
