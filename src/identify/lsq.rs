@@ -184,37 +184,41 @@ impl LsqFit {
     }
 }
 
-/// Eigenvalues of `J^T J` below this fraction of the largest are a null direction: the
-/// matrix is singular only when a column is exactly zero or exactly dependent (a limit
-/// that does not bind, a parameter the channels do not reach), which leaves eigenvalues at
-/// rounding level, 1e-16 of the largest; 1e-12 keeps a margin above that.
+/// Eigenvalues of the scaled `J^T J` (unit diagonal: columns normalised, so that units do
+/// not count) below this are a null direction: the matrix is singular only when columns
+/// are exactly dependent (a limit that does not bind, a parameter the channels do not
+/// reach), which leaves eigenvalues at rounding level, 1e-16; 1e-12 keeps a margin above.
 const NULL_EIGENVALUE: f64 = 1e-12;
 
 /// A parameter whose squared share of a null direction exceeds this is not identified.
 const NULL_SHARE: f64 = 1e-6;
 
 /// One-sigma uncertainties from a singular `J^T J` (scaled by `s2`): infinite for a
-/// parameter that takes part in a null direction (the data cannot fix it), and from the
-/// pseudo-inverse for the others, whose estimates the null directions do not touch (a
-/// flow limit that never binds leaves the other parameters' uncertainties defined).
+/// parameter whose column is zero or that takes part in a null direction (the data cannot
+/// fix it), and from the pseudo-inverse for the others, whose estimates the null
+/// directions do not touch (a flow limit that never binds leaves the other parameters'
+/// uncertainties defined).
 fn singular_sigma(jtj: DMatrix<f64>, s2: f64) -> Vec<f64> {
     let n = jtj.nrows();
-    let eig = nalgebra::SymmetricEigen::new(jtj);
-    let largest = eig.eigenvalues.iter().fold(0.0f64, |m, v| m.max(v.abs()));
-    let null = |j: usize| !(eig.eigenvalues[j] > NULL_EIGENVALUE * largest);
-    (0..n)
-        .map(|i| {
-            let v = |j: usize| eig.eigenvectors[(i, j)].powi(2);
-            if (0..n).filter(|&j| null(j)).map(v).sum::<f64>() > NULL_SHARE {
-                return f64::INFINITY;
-            }
-            let var: f64 = (0..n)
-                .filter(|&j| !null(j))
-                .map(|j| v(j) / eig.eigenvalues[j])
-                .sum();
-            (s2 * var).sqrt()
-        })
-        .collect()
+    let live: Vec<usize> = (0..n).filter(|&i| jtj[(i, i)] > 0.0).collect();
+    let d: Vec<f64> = live.iter().map(|&i| jtj[(i, i)].sqrt()).collect();
+    let m = live.len();
+    let scaled = DMatrix::from_fn(m, m, |a, b| jtj[(live[a], live[b])] / (d[a] * d[b]));
+    let eig = nalgebra::SymmetricEigen::new(scaled);
+    let null = |j: usize| !(eig.eigenvalues[j] > NULL_EIGENVALUE);
+    let mut sigma = vec![f64::INFINITY; n];
+    for (a, &i) in live.iter().enumerate() {
+        let v = |j: usize| eig.eigenvectors[(a, j)].powi(2);
+        if (0..m).filter(|&j| null(j)).map(v).sum::<f64>() > NULL_SHARE {
+            continue;
+        }
+        let var: f64 = (0..m)
+            .filter(|&j| !null(j))
+            .map(|j| v(j) / eig.eigenvalues[j])
+            .sum();
+        sigma[i] = (s2 * var).sqrt() / d[a];
+    }
+    sigma
 }
 
 fn finish(theta: Vec<f64>, cost: f64, m: usize, jm: &DMatrix<f64>, iterations: usize) -> LsqFit {
