@@ -249,10 +249,15 @@ pub(super) fn spool_recorded(c: &Campaign) -> bool {
 const CANDIDATE_WIDTH: f64 = 0.5;
 
 /// Range of a baseline parameter in the baseline's refinement
-/// ([`BaselineParameter::refinement_width`]).
-fn refinement_range(p: &Params, which: BaselineParameter) -> Range {
+/// ([`BaselineParameter::refinement_width`]); the stiffness's is absolute
+/// ([`stiffness_range`]), and with no spool `spool_recorded` to pin the valve its
+/// dynamics are as free as in the candidates' fits.
+fn refinement_range(p: &Params, which: BaselineParameter, spool_recorded: bool) -> Range {
     match which {
         TableStiffness => stiffness_range(p),
+        ValveFrequency | ValveDamping | ValveTimeConstant if !spool_recorded => {
+            range_within(p, which, CANDIDATE_WIDTH)
+        }
         _ => range_within(p, which, which.refinement_width()),
     }
 }
@@ -271,8 +276,8 @@ pub(super) struct Refined {
 /// parameters of [`REFINED`], [`REFINED_FRICTION`], [`REFINED_SPRING`] and the valve
 /// dynamics within their refinement ranges, and, with `effect`, that effect's parameters
 /// from `theta0` (held for stick-slip, whose chatter the deterministic residual does not
-/// see) within their bounds for the table `table`. The iterations are capped at `iterations`: a
-/// baseline that lacks an effect does not converge and need not.
+/// see) within their bounds for the table `table`. The iterations are capped at
+/// `iterations`: a baseline that lacks an effect does not converge and need not.
 pub(super) fn refine_output_error(
     c: &Campaign,
     p0: &Params,
@@ -289,16 +294,10 @@ pub(super) fn refine_output_error(
         .chain(valve_dynamics(p0))
         .copied()
         .collect();
-    let spool_recorded = spool_recorded(c);
+    let spool = spool_recorded(c);
     let ranges: Vec<Range> = free
         .iter()
-        .map(|&w| match w {
-            // no spool pinned the valve: it is as free as in the candidates' fits
-            ValveFrequency | ValveDamping | ValveTimeConstant if !spool_recorded => {
-                range_within(p0, w, CANDIDATE_WIDTH)
-            }
-            _ => refinement_range(p0, w),
-        })
+        .map(|&w| refinement_range(p0, w, spool))
         .collect();
     let (e, theta_e) = match effect {
         Some((e, t)) if e != Effect::StickSlip => (Some(e), t.to_vec()),
