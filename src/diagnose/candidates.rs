@@ -10,7 +10,7 @@ use super::evidence::not_evidence;
 use super::output::{Candidate, PartRows};
 use super::part::Part;
 use super::residuals::{CellScores, Cells, NoiseFloor, Whitening};
-use super::starts::{indices, informed_start, starts};
+use super::starts::{informed_start, starts};
 use super::stick_slip::fit_stick_slip;
 use super::{residuals, trace_enabled};
 use crate::campaign::Campaign;
@@ -105,7 +105,8 @@ pub(super) fn fit_candidate(
     whitening: &Whitening,
     hold: &Hold,
 ) -> Option<Candidate> {
-    let sig: Vec<usize> = indices(c, e.signature_tests())
+    let sig: Vec<usize> = e
+        .signature_tests(c, &bases[0])
         .into_iter()
         .filter(|i| fit_idx.contains(i))
         .collect();

@@ -2,7 +2,8 @@
 //! their signature lives, how they are read from and applied to parameters, fitting bounds.
 
 use super::residuals::Channel;
-use crate::campaign::Campaign;
+use crate::campaign::{Campaign, Measured, TestKind};
+use crate::identify::select::{random_roles, sine_split, slowest_first};
 use crate::params::Params;
 use serde::Serialize;
 
@@ -59,18 +60,25 @@ impl Effect {
     /// Whether `c` records what its signature needs ([`crate::effects::Effect::signature_channels`]):
     /// `Err` names the alternatives when it does not (the effect is not testable).
     pub(super) fn testable(self, c: &Campaign) -> Result<(), String> {
-        let recorded = |name: &str| {
-            Channel::named(name)
-                .is_some_and(|ch| c.records.iter().any(|r| ch.measured(r).is_some()))
-        };
+        let recorded = |m: Measured| c.records.iter().any(|r| r.measured(m).is_some());
         let alternatives = self.catalogue().signature_channels;
         if alternatives
             .iter()
-            .any(|set| set.iter().all(|ch| recorded(ch)))
+            .any(|set| set.iter().all(|&m| recorded(m)))
         {
             return Ok(());
         }
-        let needs: Vec<String> = alternatives.iter().map(|set| set.join(" and ")).collect();
+        // the channels as the diagnosis names them (JSON, reports)
+        let named = |m: &Measured| {
+            Channel::ALL
+                .into_iter()
+                .find(|ch| ch.recorded() == *m)
+                .map_or(m.name(), Channel::name)
+        };
+        let needs: Vec<String> = alternatives
+            .iter()
+            .map(|set| set.iter().map(named).collect::<Vec<_>>().join(" and "))
+            .collect();
         Err(format!(
             "{} not testable: its signature needs the {} channel, and no test recorded it",
             self.name(),
@@ -78,9 +86,32 @@ impl Effect {
         ))
     }
 
-    /// The fitting tests where its signature lives.
-    pub(super) fn signature_tests(self) -> &'static [&'static str] {
-        self.catalogue().signature_tests
+    /// The tests of `c` where its signature lives
+    /// ([`crate::effects::Effect::signature_tests`]), in campaign order; the friction-
+    /// and inertia-dominated sines are told apart on `table`.
+    pub(super) fn signature_tests(self, c: &Campaign, table: &Params) -> Vec<usize> {
+        let wanted = self.catalogue().signature_tests;
+        let roles = random_roles(c);
+        let (slow, fast) = sine_split(c, table.table.mass_kg, table.friction.force_n);
+        let triangles: Vec<usize> = (0..c.info.tests.len())
+            .filter(|&i| c.info.tests[i].kind == TestKind::Triangle)
+            .collect();
+        let mut picked: Vec<usize> = wanted.random.iter().filter_map(|&r| roles.of(r)).collect();
+        picked.extend(slowest_first(c, &slow).into_iter().take(wanted.slow_sines));
+        picked.extend(
+            slowest_first(c, &triangles)
+                .into_iter()
+                .take(wanted.slow_triangles),
+        );
+        picked.extend(
+            slowest_first(c, &fast)
+                .into_iter()
+                .rev()
+                .take(wanted.fast_sines),
+        );
+        picked.sort_unstable();
+        picked.dedup();
+        picked
     }
 
     /// The effect's parameters in `p` (the inverse of [`Effect::apply`]).
@@ -129,6 +160,38 @@ mod tests {
             e.apply(&mut p, &theta);
             assert!(entry.is_enabled(&p));
             assert_eq!(e.read(&p), theta);
+        }
+    }
+
+    /// The signature tests are chosen by what they excite: on the paper's program under a
+    /// laboratory's names, each effect gets the paper's tests.
+    #[test]
+    fn signature_tests_are_the_papers_under_any_name() {
+        let opts = crate::campaign::synth::SynthOptions {
+            random_duration_s: 12.0,
+            ..Default::default()
+        };
+        let mut c = crate::campaign::synth::synthesise(&Params::trees_lab(), &opts, None);
+        for (k, t) in c.info.tests.iter_mut().enumerate() {
+            t.name = format!("run_{:02}_{}", 17 - k, t.name);
+        }
+        let paper = |e: Effect| -> &[&str] {
+            match e {
+                Effect::Specimen => &["R2", "R3"],
+                Effect::Foundation => &["R1", "R3", "S9"],
+                Effect::StickSlip => &["S1", "S2", "S4", "S5", "S7", "S8", "T1", "T3"],
+                Effect::FlowSaturation | Effect::FlowAsymmetry => &["R2", "S6", "S9"],
+                Effect::ValveDeadband => &["R2", "S1", "T1", "T3"],
+                Effect::FrictionAsymmetry | Effect::FreePlay => &["S1", "S4", "T1", "T3"],
+            }
+        };
+        for e in EFFECTS {
+            let names: Vec<&str> = e
+                .signature_tests(&c, &Params::trees_lab())
+                .into_iter()
+                .map(|i| c.info.tests[i].name.rsplit('_').next().unwrap())
+                .collect();
+            assert_eq!(names, paper(e), "{}", e.name());
         }
     }
 }

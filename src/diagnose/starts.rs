@@ -52,13 +52,6 @@ mod grid {
     pub const GAPS_M: [f64; 3] = [2e-4, 6e-4, 1.5e-3];
 }
 
-pub(super) fn indices(c: &Campaign, names: &[&str]) -> Vec<usize> {
-    names
-        .iter()
-        .filter_map(|n| c.info.tests.iter().position(|t| t.name == *n))
-        .collect()
-}
-
 /// Apparent mass `F/a` of the mass test (R2 in the paper; else the oil-column test:
 /// [`crate::identify::select`]), the reference acceleration as instrument, on 1-40 Hz.
 pub(super) fn apparent_mass(c: &Campaign) -> Option<(Vec<f64>, Vec<Complex64>)> {

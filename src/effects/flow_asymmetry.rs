@@ -3,7 +3,8 @@
 //! (the mean is kept); with the nonlinear actuator it scales the orifice coefficient alike.
 
 use super::friction_asymmetry::direction_factors;
-use super::{parameter, switch, Effect};
+use super::{parameter, switch, Effect, RandomRole, SignatureTests};
+use crate::campaign::Measured;
 use crate::params::Rule::Positive;
 use serde::{Deserialize, Serialize};
 
@@ -44,7 +45,13 @@ pub const EFFECT: Effect = Effect {
     unfitted: &[],
     cross_check: None,
     help: "",
-    signature_tests: &["S6", "S9", "R2"],
+    // the fastest sines and the mass test demand the most flow (S9, S6, R2)
+    signature_tests: SignatureTests {
+        random: &[RandomRole::Mass],
+        slow_sines: 0,
+        slow_triangles: 0,
+        fast_sines: 2,
+    },
     no_effect: &[("ratio", 1.0)],
-    signature_channels: &[&["displacement"], &["acceleration"]],
+    signature_channels: &[&[Measured::Displacement], &[Measured::Acceleration]],
 };

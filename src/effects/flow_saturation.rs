@@ -1,7 +1,8 @@
 //! `flow_saturation`: bounded valve/supply flow (spec section 7): each metered flow is
 //! clipped to `+-Q_max`.
 
-use super::{parameter, switch, Effect};
+use super::{parameter, switch, Effect, RandomRole, SignatureTests};
+use crate::campaign::Measured;
 use crate::params::Rule::Positive;
 use serde::{Deserialize, Serialize};
 
@@ -49,7 +50,13 @@ pub const EFFECT: Effect = Effect {
     unfitted: &[],
     cross_check: None,
     help: "",
-    signature_tests: &["S9", "S6", "R2"],
+    // the fastest sines and the mass test demand the most flow (S9, S6, R2)
+    signature_tests: SignatureTests {
+        random: &[RandomRole::Mass],
+        slow_sines: 0,
+        slow_triangles: 0,
+        fast_sines: 2,
+    },
     no_effect: &[],
-    signature_channels: &[&["displacement"], &["acceleration"]],
+    signature_channels: &[&[Measured::Displacement], &[Measured::Acceleration]],
 };

@@ -2,7 +2,8 @@
 //! actuator, friction and table stiffness push it back ([`Oscillator`]).
 
 use super::oscillator::Oscillator;
-use super::{parameter, switch, Effect};
+use super::{parameter, switch, Effect, RandomRole, SignatureTests};
+use crate::campaign::Measured;
 use crate::params::Rule::{NonNegative, Positive};
 use serde::{Deserialize, Serialize};
 
@@ -54,9 +55,17 @@ pub const EFFECT: Effect = Effect {
     unfitted: &[],
     cross_check: None,
     help: "",
-    // the broadest random test shows a stiff foundation's mode, the largest forces its
-    // deflection in the LVDT
-    signature_tests: &["R1", "R3", "S9"],
+    // the broadest random tests show a stiff foundation's mode, the fastest sine's
+    // forces its deflection in the LVDT (R1, R3, S9)
+    signature_tests: SignatureTests {
+        random: &[RandomRole::Valve, RandomRole::OilColumn],
+        slow_sines: 0,
+        slow_triangles: 0,
+        fast_sines: 1,
+    },
     no_effect: &[],
-    signature_channels: &[&["force"], &["acceleration", "displacement"]],
+    signature_channels: &[
+        &[Measured::Force],
+        &[Measured::Acceleration, Measured::Displacement],
+    ],
 };

@@ -6,7 +6,8 @@
 //! LVDT (and the velocity derived from it) follow the rod; the accelerometer, the friction
 //! and the table's stiffness are on the table.
 
-use super::{parameter, switch, Broken, Effect};
+use super::{parameter, switch, Broken, Effect, SignatureTests};
+use crate::campaign::Measured;
 use crate::params::Params;
 use crate::params::Rule::{NonNegative, Positive};
 use serde::{Deserialize, Serialize};
@@ -144,8 +145,14 @@ pub const EFFECT: Effect = Effect {
     ],
     cross_check: Some(rod_lighter_than_table),
     help: "",
-    // the reversals of the triangles and slow sines, where the rod crosses the gap
-    signature_tests: &["T1", "T3", "S1", "S4"],
+    // the reversals of the slowest triangles and sines, where the rod crosses the gap
+    // (T1, T3, S1, S4)
+    signature_tests: SignatureTests {
+        random: &[],
+        slow_sines: 2,
+        slow_triangles: 2,
+        fast_sines: 0,
+    },
     no_effect: &[("gap_m", 0.0)],
-    signature_channels: &[&["acceleration", "displacement"]],
+    signature_channels: &[&[Measured::Acceleration, Measured::Displacement]],
 };

@@ -2,7 +2,8 @@
 //! section 7, second part): `F_mu 2r/(1+r)` while `Z > 0`, `F_mu 2/(1+r)` while `Z <= 0`,
 //! so the mean of the two is kept.
 
-use super::{parameter, switch, Effect};
+use super::{parameter, switch, Effect, SignatureTests};
+use crate::campaign::Measured;
 use crate::params::Rule::Positive;
 use serde::{Deserialize, Serialize};
 
@@ -53,7 +54,14 @@ pub const EFFECT: Effect = Effect {
     unfitted: &[],
     cross_check: None,
     help: "",
-    signature_tests: &["T1", "T3", "S1", "S4"],
+    // the slowest triangles and sines, where friction is most of the force (T1, T3,
+    // S1, S4)
+    signature_tests: SignatureTests {
+        random: &[],
+        slow_sines: 2,
+        slow_triangles: 2,
+        fast_sines: 0,
+    },
     no_effect: &[("ratio", 1.0)],
-    signature_channels: &[&["force"], &["acceleration"]],
+    signature_channels: &[&[Measured::Force], &[Measured::Acceleration]],
 };

@@ -28,6 +28,8 @@ pub mod specimen;
 pub mod stick_slip;
 pub mod valve_deadband;
 
+use crate::campaign::Measured;
+pub use crate::identify::select::RandomRole;
 use crate::params::{Params, Rule};
 
 /// Range a diagnosis fit may move one effect parameter in (`lower <= x <= upper`).
@@ -88,10 +90,9 @@ pub struct Effect {
     pub cross_check: Option<fn(&Params) -> Option<Broken>>,
     /// More `--effect` syntax for the help, after the parameter list; empty when none.
     pub help: &'static str,
-    /// Test kinds where the effect's signature lives, recorded as the diagnosis names them
-    /// today (`src/diagnose/mod.rs`, `Effect::signature_tests`); to be replaced by test
-    /// kinds when the diagnosis picks tests by what they excite.
-    pub signature_tests: &'static [&'static str],
+    /// The tests where the effect's signature lives, by what they excite: its candidate
+    /// is fitted on them (every test when a campaign has none of them).
+    pub signature_tests: SignatureTests,
     /// The parameters whose value makes the effect vanish, with that value (a specimen of
     /// no mass, a static ratio of 1): a fitted cause is evidence only when its uncertainty
     /// excludes them (issue 17 part 3). Empty when the effect vanishes only at a limit
@@ -99,11 +100,31 @@ pub struct Effect {
     /// no parameter sits at a bound of its fitting range guards it.
     pub no_effect: &'static [(&'static str, f64)],
     /// The recorded channels its signature needs, as alternatives: the effect can be
-    /// tested when every channel of at least one alternative is recorded (names of
-    /// [`crate::diagnose::Channel::name`]); otherwise the diagnosis reports it as not testable,
-    /// never as absent (issue 16 part 5).
-    pub signature_channels: &'static [&'static [&'static str]],
+    /// tested when every channel of at least one alternative is recorded; otherwise the
+    /// diagnosis reports it as not testable, never as absent (issue 16 part 5).
+    pub signature_channels: &'static [&'static [Measured]],
 }
+
+/// The tests of a campaign where an effect's signature lives, by what they excite and
+/// never by name (a laboratory names its tests as it likes): random tests by their role in
+/// section 4, and periodic tests by their declared peak velocity
+/// ([`crate::identify::select::slowest_first`]). Each effect notes the paper's tests its
+/// description picks.
+#[derive(Debug, Clone, Copy)]
+pub struct SignatureTests {
+    /// The random tests taking these roles.
+    pub random: &'static [RandomRole],
+    /// This many of the friction-dominated sines
+    /// ([`crate::identify::select::sine_split`]), slowest first; [`EVERY`] for all.
+    pub slow_sines: usize,
+    /// This many triangles, slowest first.
+    pub slow_triangles: usize,
+    /// This many of the inertia-dominated sines, fastest first.
+    pub fast_sines: usize,
+}
+
+/// Every test of a kind ([`SignatureTests`]).
+pub const EVERY: usize = usize::MAX;
 
 /// A rule across parameters that `p` breaks: the key to name, its value, the rule in words.
 #[derive(Debug, Clone, PartialEq)]

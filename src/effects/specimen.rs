@@ -13,7 +13,8 @@
 //! named `modeN`.
 
 use super::oscillator::Oscillator;
-use super::{parameter, switch, Broken, Effect};
+use super::{parameter, switch, Broken, Effect, RandomRole, SignatureTests};
+use crate::campaign::Measured;
 use crate::params::Params;
 use crate::params::Rule::{NonNegative, Positive};
 use serde::{Deserialize, Serialize};
@@ -251,7 +252,13 @@ pub const EFFECT: Effect = Effect {
     cross_check: Some(mode3_needs_mode2),
     help: "modes 2 and 3: mode2.mass_kg=..,mode2.frequency_hz=..,mode2.damping_ratio=.. \
            (mode3 likewise); a mode exists when its mass_kg > 0, mode 3 needs mode 2",
-    signature_tests: &["R2", "R3"],
+    // the random tests under acceleration control excite its modes (R2, R3)
+    signature_tests: SignatureTests {
+        random: &[RandomRole::Mass, RandomRole::OilColumn],
+        slow_sines: 0,
+        slow_triangles: 0,
+        fast_sines: 0,
+    },
     no_effect: &[("mass_kg", 0.0)],
-    signature_channels: &[&["force"], &["acceleration"]],
+    signature_channels: &[&[Measured::Force], &[Measured::Acceleration]],
 };

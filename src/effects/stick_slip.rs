@@ -1,7 +1,8 @@
 //! `stick_slip`: static friction above kinetic, a Stribeck amplitude on the Bouc-Wen
 //! friction (spec section 7): `F_mu(v) = F_mu (1 + (r_s - 1) exp(-v^2 / v_s^2))`.
 
-use super::{parameter, switch, Effect};
+use super::{parameter, switch, Effect, SignatureTests, EVERY};
+use crate::campaign::Measured;
 use crate::params::Rule::{AtLeastOne, Positive};
 use serde::{Deserialize, Serialize};
 
@@ -78,8 +79,14 @@ pub const EFFECT: Effect = Effect {
     unfitted: &[],
     cross_check: None,
     help: "",
-    // the slow sines creep through the Stribeck range twice a cycle
-    signature_tests: &["S1", "S2", "S4", "S5", "S7", "S8", "T1", "T3"],
+    // the friction-dominated sines creep through the Stribeck range twice a cycle, as
+    // do the slowest triangles (S1, S2, S4, S5, S7, S8, T1, T3)
+    signature_tests: SignatureTests {
+        random: &[],
+        slow_sines: EVERY,
+        slow_triangles: 2,
+        fast_sines: 0,
+    },
     no_effect: &[("static_ratio", 1.0)],
-    signature_channels: &[&["force"], &["acceleration"]],
+    signature_channels: &[&[Measured::Force], &[Measured::Acceleration]],
 };

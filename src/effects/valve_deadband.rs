@@ -1,7 +1,8 @@
 //! `valve_deadband`: spool overlap (spec section 7): no flow while `|x_v| <= d`, the
 //! opening shifted by `d` outside the band.
 
-use super::{parameter, switch, Effect};
+use super::{parameter, switch, Effect, RandomRole, SignatureTests};
+use crate::campaign::Measured;
 use crate::params::Rule::HalfOpenUnit;
 use serde::{Deserialize, Serialize};
 
@@ -58,7 +59,18 @@ pub const EFFECT: Effect = Effect {
     unfitted: &[],
     cross_check: None,
     help: "",
-    signature_tests: &["R2", "T1", "T3", "S1"],
+    // the mass test's small commands and the slowest reversals sit in the deadband
+    // (R2, T1, T3, S1)
+    signature_tests: SignatureTests {
+        random: &[RandomRole::Mass],
+        slow_sines: 1,
+        slow_triangles: 2,
+        fast_sines: 0,
+    },
     no_effect: &[("deadband", 0.0)],
-    signature_channels: &[&["displacement"], &["acceleration"], &["force"]],
+    signature_channels: &[
+        &[Measured::Displacement],
+        &[Measured::Acceleration],
+        &[Measured::Force],
+    ],
 };

@@ -20,7 +20,7 @@
 //!   holds many amplitudes and speeds: friction and viscosity separate), then the longest;
 //!   checked on every other test with both channels.
 
-use crate::campaign::{Campaign, Control, Measured, TestKind};
+use crate::campaign::{Campaign, Control, Measured, TestKind, TestSpec};
 use std::f64::consts::PI;
 
 /// A sine is slow (friction shows, inertia does not) when its inertia force amplitude is
@@ -76,6 +76,26 @@ impl RandomRoles {
     pub fn validation(&self) -> Option<usize> {
         self.mass.or(self.oil_column)
     }
+
+    /// The test taking `role`, if one does.
+    pub fn of(&self, role: RandomRole) -> Option<usize> {
+        match role {
+            RandomRole::Valve => self.valve,
+            RandomRole::Mass => self.mass,
+            RandomRole::OilColumn => self.oil_column,
+        }
+    }
+}
+
+/// A random test's role in section 4 (see the module doc).
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum RandomRole {
+    /// 4.1.1: command to spool, a small displacement over a wide band (R1).
+    Valve,
+    /// 4.1.2: the apparent mass, under acceleration control (R2).
+    Mass,
+    /// 4.1.3: the oil column, excited well above 14 Hz (R3).
+    OilColumn,
 }
 
 /// Upper edge of the `i`-th test's band: declared, else the Nyquist frequency of the
@@ -144,17 +164,60 @@ pub fn random_roles(c: &Campaign) -> RandomRoles {
 /// The sine tests of `c` split into slow (friction) and fast (inertia) ones, by their
 /// declared amplitude and frequency against a table of `mass_kg` with `friction_n`.
 pub fn sine_roles(c: &Campaign, mass_kg: f64, friction_n: f64) -> (Vec<String>, Vec<String>) {
-    let (mut slow, mut fast) = (Vec::new(), Vec::new());
-    for s in c.info.tests.iter().filter(|s| s.kind == TestKind::Sine) {
+    let names = |v: Vec<usize>| {
+        v.into_iter()
+            .map(|i| c.info.tests[i].name.clone())
+            .collect()
+    };
+    let (slow, fast) = sine_split(c, mass_kg, friction_n);
+    (names(slow), names(fast))
+}
+
+/// [`sine_roles`] as indices into the campaign, in campaign order.
+pub fn sine_split(c: &Campaign, mass_kg: f64, friction_n: f64) -> (Vec<usize>, Vec<usize>) {
+    let sines = (0..c.info.tests.len()).filter(|&i| c.info.tests[i].kind == TestKind::Sine);
+    sines.partition(|&i| {
+        let s = &c.info.tests[i];
         let w = 2.0 * PI * s.frequency_hz.unwrap_or(0.0);
         let inertia = mass_kg * s.amplitude_m.unwrap_or(0.0).abs() * w * w;
-        if inertia <= SLOW_SINE_INERTIA_RATIO * friction_n.abs() {
-            slow.push(s.name.clone());
-        } else {
-            fast.push(s.name.clone());
-        }
+        inertia <= SLOW_SINE_INERTIA_RATIO * friction_n.abs()
+    })
+}
+
+/// Peak velocity of a periodic test from its declared frequency and amplitude, m/s: `2 pi
+/// f A` for a sine, `4 f A` for a triangle; `None` for other kinds or undeclared values.
+pub fn peak_velocity_m_s(spec: &TestSpec) -> Option<f64> {
+    let (f, a) = (spec.frequency_hz?, spec.amplitude_m?.abs());
+    match spec.kind {
+        TestKind::Sine => Some(2.0 * PI * f * a),
+        TestKind::Triangle => Some(4.0 * f * a),
+        _ => None,
     }
-    (slow, fast)
+}
+
+/// Two peak velocities this close (relative) are equal: the paper's 0.1 Hz x 5 cm and
+/// 0.05 Hz x 10 cm differ only by rounding.
+const SAME_VELOCITY: f64 = 1e-9;
+
+/// `tests` (periodic, with declared frequency and amplitude) slowest first: by peak
+/// velocity, and at the same velocity the lower frequency (the longer stroke) first.
+/// Tests without a peak velocity are left out.
+pub fn slowest_first(c: &Campaign, tests: &[usize]) -> Vec<usize> {
+    let mut keyed: Vec<(f64, f64, usize)> = tests
+        .iter()
+        .filter_map(|&i| {
+            let s = &c.info.tests[i];
+            Some((peak_velocity_m_s(s)?, s.frequency_hz?, i))
+        })
+        .collect();
+    keyed.sort_by(|a, b| {
+        if (a.0 - b.0).abs() <= SAME_VELOCITY * a.0.abs().max(b.0.abs()) {
+            a.1.total_cmp(&b.1)
+        } else {
+            a.0.total_cmp(&b.0)
+        }
+    });
+    keyed.into_iter().map(|k| k.2).collect()
 }
 
 #[cfg(test)]
