@@ -251,6 +251,77 @@ impl Welch {
     }
 }
 
+/// Auto and cross spectra of an instrument `z`, an input `x` and an output `y`, for the
+/// equation-error residual of a parametric fit ([`CrossSpectra::equation_error`]).
+#[derive(Debug, Clone)]
+pub struct CrossSpectra {
+    pub frequency_hz: Vec<f64>,
+    pub segments: usize,
+    s_zz: Vec<f64>,
+    s_zx: Vec<Complex64>,
+    s_zy: Vec<Complex64>,
+    s_xx: Vec<f64>,
+    s_yy: Vec<f64>,
+    s_xy: Vec<Complex64>,
+}
+
+/// Floor of the residual spectrum `S_ee` as a fraction of `S_yy`: a record without noise
+/// leaves only rounding (about 1e-16 of the output) in `e`, so 1e-12 never hides real
+/// noise and keeps the residual of a noise-free record finite.
+const RESIDUAL_SPECTRUM_FLOOR: f64 = 1e-12;
+
+impl CrossSpectra {
+    /// The spectra of `z`, `x` and `y` (equal lengths) with `welch`'s segments. With
+    /// `z = x` the residual is that of H1 (a noise-free input).
+    pub fn new(welch: &Welch, z: &[f64], x: &[f64], y: &[f64]) -> Result<Self, FrfError> {
+        if x.len() != y.len() {
+            return Err(FrfError::LengthMismatch(x.len(), y.len()));
+        }
+        if z.len() != x.len() {
+            return Err(FrfError::LengthMismatch(z.len(), x.len()));
+        }
+        let (fz, fx, fy) = (
+            welch.segment_spectra(z)?,
+            welch.segment_spectra(x)?,
+            welch.segment_spectra(y)?,
+        );
+        Ok(CrossSpectra {
+            frequency_hz: welch.frequencies(),
+            segments: fx.len(),
+            s_zz: welch.auto(&fz),
+            s_zx: welch.cross(&fz, &fx),
+            s_zy: welch.cross(&fz, &fy),
+            s_xx: welch.auto(&fx),
+            s_yy: welch.auto(&fy),
+            s_xy: welch.cross(&fx, &fy),
+        })
+    }
+
+    /// Indices of the bins within `[lo, hi]` Hz.
+    pub fn band(&self, lo: f64, hi: f64) -> Vec<usize> {
+        band_indices(&self.frequency_hz, lo, hi)
+    }
+
+    /// The instrumental-variable equation error of a model response `h` at bin `i`,
+    /// `(h S_zx - S_zy) / sigma`, in units of its own standard deviation
+    /// `sigma^2 = S_zz S_ee / n_segments`, with `S_ee = S_yy - 2 Re(h S_yx) + |h|^2 S_xx` the
+    /// spectrum of `e = y - h x` (Pintelon and Schoukens, System Identification, the
+    /// sample maximum-likelihood cost with an instrument). At the true `h`, `e` holds
+    /// only the noise of `x` and `y` and the window's leakage, none of it correlated
+    /// with `z`, so the error is zero-mean with an expected squared magnitude of one
+    /// (overlapping segments aside): the least squares on it
+    /// weigh every bin by what it knows. Unlike a residual relative to the measured
+    /// ratio `S_zy / S_zx`, no noisy estimate divides it: a bin whose `S_zx` came out
+    /// small by chance (a large measured FRF) is not thereby down-weighted, and a bin
+    /// the noise dominates does not pull the fit towards zero.
+    pub fn equation_error(&self, i: usize, h: Complex64) -> Complex64 {
+        let s_ee = self.s_yy[i] - 2.0 * (h * self.s_xy[i].conj()).re + h.norm_sqr() * self.s_xx[i];
+        let s_ee = s_ee.max(RESIDUAL_SPECTRUM_FLOOR * self.s_yy[i]);
+        let sigma = (self.s_zz[i] * s_ee / self.segments.max(1) as f64).sqrt();
+        (h * self.s_zx[i] - self.s_zy[i]) / sigma.max(f64::MIN_POSITIVE)
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -291,6 +362,32 @@ mod tests {
         let mid = e.frequency_hz.len() / 2;
         assert!((e.h1[mid].re - 2.0).abs() < 0.1, "{}", e.h1[mid]);
         assert!((h1.h1[mid].re - 1.0).abs() < 0.2, "{}", h1.h1[mid]);
+    }
+
+    /// At the true response the equation error of a noisy input has unit variance (it
+    /// is in units of its own sigma); the H1-like response of the noisy input does not.
+    #[test]
+    fn equation_error_is_in_units_of_its_sigma() {
+        let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(7);
+        let n = Normal::new(0.0, 1.0).unwrap();
+        let z: Vec<f64> = (0..1 << 16).map(|_| n.sample(&mut rng)).collect();
+        let x: Vec<f64> = z.iter().map(|v| v + n.sample(&mut rng)).collect();
+        let y: Vec<f64> = z
+            .iter()
+            .map(|v| 2.0 * v + 0.5 * n.sample(&mut rng))
+            .collect();
+        let w = Welch::new(100.0, WelchOptions::for_resolution(100.0, 1.0)).unwrap();
+        let c = CrossSpectra::new(&w, &z, &x, &y).unwrap();
+        let bins = c.band(5.0, 45.0);
+        let mean_square = |h: f64| {
+            bins.iter()
+                .map(|&i| c.equation_error(i, Complex64::new(h, 0.0)).norm_sqr())
+                .sum::<f64>()
+                / bins.len() as f64
+        };
+        // E|e|^2 = 1 but for the 50 % overlap's correlated segments (up to ~1.2)
+        assert!((mean_square(2.0) - 1.0).abs() < 0.3, "{}", mean_square(2.0));
+        assert!(mean_square(1.0) > 20.0, "{}", mean_square(1.0));
     }
 
     #[test]

@@ -37,7 +37,7 @@ pub use error::IdentifyError;
 pub use estimates::Estimate;
 pub use friction::{bouc_wen_path, fit_friction, fit_triangles};
 pub use mass::{fit_mass, fit_mass_corrected};
-pub use oil_column::{fit_oil_column, OilGeometry};
+pub use oil_column::{fit_oil_column, OilColumnInput, OilGeometry};
 pub use periodic::{fit_friction_and_mass, fit_mass_periodic};
 pub use results::*;
 pub use servovalve::{fit_servovalve, relative_error};
@@ -45,7 +45,7 @@ pub use validation::validate;
 
 use crate::campaign::screen::{screen, Action, Screening};
 use crate::campaign::{Campaign, Record};
-use crate::linear::OilColumn;
+use crate::linear::{OilColumn, ValveTf};
 use crate::params::{ActuatorModel, Params};
 use frf::WelchOptions;
 
@@ -275,12 +275,14 @@ pub fn identify_screened_with(s: &Screening, scope: Scope) -> Identification {
         p.friction.yield_displacement_m = fr.yield_displacement_m;
         p.friction.shape = fr.shape.min(0.999);
     }
+    // the identified servovalve carries the valve command to the spool in the oil-column fit
+    let valve_tf = valve.as_ref().map(|_| ValveTf::new(&p));
     let oil = match (roles.oil_column, mass_kg) {
         (Some(i), Some(m)) => OilGeometry::from_campaign(g).and_then(|og| {
             in_file(
                 c,
                 name(i),
-                fit_oil_column(name(i), &c.records[i], fs(i), &og, m),
+                fit_oil_column(name(i), &c.records[i], fs(i), &og, m, valve_tf.as_ref()),
             )
         }),
         (Some(_), None) => Err(IdentifyError::NeedsUpstream {

@@ -76,7 +76,8 @@ pub struct MassFit {
     pub measured: FrfData,
 }
 
-/// Oil column (paper 4.1.3) from `spool -> force`, instrumented by the valve command.
+/// Oil column (paper 4.1.3) from the force against the valve command through the
+/// identified servovalve, or against the spool instrumented by the valve command.
 #[derive(Debug, Clone, Serialize)]
 pub struct OilColumnFit {
     pub test: String,
@@ -93,8 +94,11 @@ pub struct OilColumnFit {
     /// The same fit on H1 from the noisy spool, to show its bias.
     pub h1_frequency_hz: f64,
     pub h1_damping_ratio: f64,
+    /// `spool -> force` with the valve command as instrument (paper Figure 6).
     pub measured: FrfData,
     pub mass_used_kg: f64,
+    /// What the fit took as the force's input.
+    pub input: super::oil_column::OilColumnInput,
 }
 
 /// Triangles (eqs. 4.9-4.10): elastic force vs displacement away from reversals.

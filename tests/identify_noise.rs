@@ -1,0 +1,95 @@
+//! Issue 17 part 6: the oil column identified at three times the default sensor noise,
+//! on the 41-t TREES Lab table and on a 6-t table (campaigns from the project's own
+//! synthesiser, seeded; section-4 identification only, no device fit).
+//!
+//! Tolerances from `scripts/dev/identify_sweep.py --seeds 1-6 --noise 1,3 --table 41t
+//! --table 6t=scripts/dev/table_6t.toml` (24 campaigns): the oil-column frequency came
+//! out +0.04 to +0.19 % (the identified mass's -0.14 to -0.26 % enters `sqrt(k/M)`),
+//! the damping -2.8 to +4.3 %. Before the fix the same seeds gave -1.4 to -5.9 % and
+//! -1.4 to +37 % at three times the noise; the seeds below were among the worst.
+
+use shaketable::campaign::screen::screen;
+use shaketable::campaign::synth::{synthesise, NoiseLevels, SynthOptions};
+use shaketable::identify::{identify_screened, OilColumnInput};
+use shaketable::linear::OilColumn;
+use shaketable::Params;
+
+/// Oil-column frequency tolerance, relative: three times the largest error of the sweep
+/// (0.19 %), a third of the smallest bias of the former estimator on these seeds.
+const FREQUENCY_TOLERANCE: f64 = 0.006;
+/// Oil-column damping tolerance, relative: twice the largest error of the sweep (4.3 %),
+/// below the former estimator's +17 to +37 % on these seeds.
+const DAMPING_TOLERANCE: f64 = 0.08;
+/// How many times the default sensor noise.
+const NOISE_SCALE: f64 = 3.0;
+
+fn noisy(scale: f64) -> NoiseLevels {
+    let n = NoiseLevels::default();
+    NoiseLevels {
+        spool: scale * n.spool,
+        displacement_m: scale * n.displacement_m,
+        acceleration_m_s2: scale * n.acceleration_m_s2,
+        force_n: scale * n.force_n,
+    }
+}
+
+/// The 6-t table of `scripts/dev/table_6t.toml`: the TREES Lab table scaled by
+/// `r = 6000 / 41258` in everything the force scales with (piston area, oil volume, flow
+/// gain, leakage, friction), the delta-P gain by `1 / r`; its oil column stays at 14.2 Hz
+/// with a 0.0336 damping ratio, under the same absolute sensor noise.
+fn table_6t() -> Params {
+    let mut p = Params::trees_lab();
+    p.table.mass_kg = 6000.0;
+    p.controller.kdp = 2.264e-7;
+    p.actuator.piston_area_m2 = 0.01325;
+    p.actuator.total_oil_volume_m3 = 0.0176;
+    p.actuator.flow_gain_m3_s = 0.02909;
+    p.actuator.leakage_m3_s_pa = 2.208e-11;
+    p.friction.force_n = 582.0;
+    p
+}
+
+/// Synthesise the program's random tests, triangles and sines of `truth` at `seed` and
+/// three times the noise, identify, and check the oil column against the truth.
+fn check_oil_column(truth: &Params, seed: u64, what: &str) {
+    let opts = SynthOptions {
+        seed,
+        noise: noisy(NOISE_SCALE),
+        ..SynthOptions::default()
+    };
+    let id = identify_screened(&screen(&synthesise(truth, &opts, None)));
+    let oil = id
+        .oil_column
+        .as_ref()
+        .unwrap_or_else(|| panic!("{what}: no oil column: {:?}", id.missing));
+    assert_eq!(oil.input, OilColumnInput::CommandThroughValve, "{what}");
+    let true_oil = OilColumn::of(truth);
+    let f_err = oil.frequency_hz / true_oil.frequency_hz - 1.0;
+    let zeta_err = oil.damping_ratio / true_oil.damping_ratio - 1.0;
+    assert!(
+        f_err.abs() < FREQUENCY_TOLERANCE,
+        "{what}: oil-column frequency {:.4} Hz vs {:.4} Hz ({:+.2} %)",
+        oil.frequency_hz,
+        true_oil.frequency_hz,
+        100.0 * f_err
+    );
+    assert!(
+        zeta_err.abs() < DAMPING_TOLERANCE,
+        "{what}: oil-column damping {:.5} vs {:.5} ({:+.1} %)",
+        oil.damping_ratio,
+        true_oil.damping_ratio,
+        100.0 * zeta_err
+    );
+}
+
+/// Seed 3 of the 41-t table at three times the noise: formerly -5.9 % and +37 %.
+#[test]
+fn oil_column_of_the_41_t_table_at_three_times_the_noise() {
+    check_oil_column(&Params::trees_lab(), 3, "41 t, seed 3");
+}
+
+/// Seed 2 of the 6-t table at three times the noise: formerly -1.6 % and +32 %.
+#[test]
+fn oil_column_of_a_6_t_table_at_three_times_the_noise() {
+    check_oil_column(&table_6t(), 2, "6 t, seed 2");
+}
