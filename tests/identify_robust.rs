@@ -169,7 +169,8 @@ fn degenerate_r1_gives_no_servovalve_and_diagnose_uses_the_closed_loop() {
     // fit gives no covariance to judge it by, absorbs part of that; the note of issue 16
     // says so.)
     assert!(id.closed_loop.is_some(), "{:?}", id.missing);
-    let d = shaketable::diagnose::diagnose(&c, None).unwrap_or_else(|e| panic!("{e}"));
+    let d = shaketable::diagnose::diagnose(&c, shaketable::diagnose::Effort::Full, None)
+        .unwrap_or_else(|e| panic!("{e}"));
     assert!(d.baseline_from().starts_with("closed-loop fit"));
     assert!(d.baseline_from().contains("servovalve"));
     assert!(d.gain.is_finite(), "{}", d.gain);

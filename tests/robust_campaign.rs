@@ -202,7 +202,7 @@ proptest! {
         let mut c = base().clone();
         apply(&mut c, &m);
         let t0 = Instant::now();
-        match shaketable::diagnose::diagnose(&c, None) {
+        match shaketable::diagnose::diagnose(&c, shaketable::diagnose::Effort::Full, None) {
             Ok(d) => {
                 check(&d.identification);
                 prop_assert!(d.gain.is_finite() || d.cause().is_none());

@@ -121,16 +121,17 @@ impl BaselineParameter {
     /// estimates, which are good to the paper's precisions (mass 3 %, oil column 10 %),
     /// so it may move each by a few of those precisions and no more; an effect the
     /// baseline lacks (e.g. a saturating flow) must not bend it into a different table.
-    fn refinement_width(self) -> f64 {
+    /// `None` for the stiffness, whose range is absolute ([`stiffness_range`]): section 4
+    /// may read a table without one as nearly zero.
+    fn refinement_width(self) -> Option<f64> {
         match self {
-            TableMass => 0.15,
-            BulkModulus => 0.3,
-            Leakage => 0.9,
-            FrictionForce | YieldDisplacement | FrictionShape => 0.5,
-            FlowGain => 0.05,
-            ValveGain | ValveFrequency | ValveDamping | ValveTimeConstant => 0.1,
-            // unused: its range is absolute ([`stiffness_range`])
-            TableStiffness => 1.0,
+            TableMass => Some(0.15),
+            BulkModulus => Some(0.3),
+            Leakage => Some(0.9),
+            FrictionForce | YieldDisplacement | FrictionShape => Some(0.5),
+            FlowGain => Some(0.05),
+            ValveGain | ValveFrequency | ValveDamping | ValveTimeConstant => Some(0.1),
+            TableStiffness => None,
         }
     }
 }
@@ -254,11 +255,13 @@ const CANDIDATE_WIDTH: f64 = 0.5;
 /// dynamics are as free as in the candidates' fits.
 fn refinement_range(p: &Params, which: BaselineParameter, spool_recorded: bool) -> Range {
     match which {
-        TableStiffness => stiffness_range(p),
         ValveFrequency | ValveDamping | ValveTimeConstant if !spool_recorded => {
             range_within(p, which, CANDIDATE_WIDTH)
         }
-        _ => range_within(p, which, which.refinement_width()),
+        _ => match which.refinement_width() {
+            Some(width) => range_within(p, which, width),
+            None => stiffness_range(p),
+        },
     }
 }
 
@@ -341,7 +344,3 @@ pub(super) fn refine_output_error(
         effect_bounds: (elo, ehi),
     })
 }
-
-/// Output-error iterations of the baseline's refinement: a baseline that lacks an effect
-/// never converges, and 8 bring a clean campaign's to its noise floor.
-pub(super) const BASELINE_ITERATIONS: usize = 8;

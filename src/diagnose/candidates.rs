@@ -6,6 +6,7 @@ use super::baseline::{
     BaselineParameter, Range, REFINED,
 };
 use super::effect::Effect;
+use super::effort::Effort;
 use super::evidence::not_evidence;
 use super::output::{Candidate, PartRows};
 use super::part::Part;
@@ -14,7 +15,7 @@ use super::starts::{informed_start, starts};
 use super::stick_slip::fit_stick_slip;
 use super::{residuals, trace_enabled};
 use crate::campaign::Campaign;
-use crate::identify::lsq::{minimise, LsqOptions};
+use crate::identify::lsq::minimise;
 use crate::params::Params;
 use rayon::prelude::*;
 use std::collections::BTreeMap;
@@ -62,9 +63,6 @@ pub(super) struct Hold<'a> {
     pub report: &'a PartRows,
 }
 
-/// Polishing rounds (of 6 output-error iterations) of the best candidate at most.
-pub(super) const POLISH_ROUNDS: usize = 3;
-
 /// Smallest share of the identified table mass a specimen's start leaves to the table
 /// when it takes its own mass out: the identified mass holds the specimen's, but a start
 /// mass far above the table's would leave a table lighter than any that carries one (a
@@ -101,10 +99,11 @@ pub(super) fn fit_candidate(
     fit_idx: &[usize],
     heldout_idx: &[usize],
     noise: &NoiseFloor,
-    opts: LsqOptions,
+    effort: Effort,
     whitening: &Whitening,
     hold: &Hold,
 ) -> Option<Candidate> {
+    let opts = effort.candidate_lsq();
     let sig: Vec<usize> = e
         .signature_tests(c, &bases[0])
         .into_iter()
@@ -211,7 +210,7 @@ pub(super) fn fit_candidate(
             all.push(start_on(b, &s));
         }
     }
-    if all.len() > 2 {
+    if all.len() > effort.screened_starts() {
         let cost_of = |(t, b): &Start| {
             residual_vector(&assemble(t, b), c, &sig, whitening)
                 .map(|r| r.iter().map(|x| x * x).sum::<f64>())
@@ -223,7 +222,11 @@ pub(super) fn fit_candidate(
             "screened starts: {:?}",
             scored.iter().map(|s| s.0).collect::<Vec<_>>()
         ));
-        all = scored.into_iter().take(2).map(|x| x.1).collect();
+        all = scored
+            .into_iter()
+            .take(effort.screened_starts())
+            .map(|x| x.1)
+            .collect();
     }
     // a start read off the data itself is fitted whatever its screening: a lightly damped
     // foundation mode a few percent off misfits more than none until the baseline has

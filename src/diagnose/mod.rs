@@ -34,6 +34,7 @@ mod baseline;
 mod candidates;
 mod direction_starts;
 mod effect;
+mod effort;
 mod evidence;
 mod locate;
 mod missed;
@@ -46,6 +47,7 @@ mod stick_slip;
 pub mod stribeck;
 
 pub use effect::{Effect, EFFECTS};
+pub use effort::Effort;
 pub use locate::{Dependence, Split};
 pub use output::{Candidate, Cause, Diagnosis, PartRows, Partial, UnexplainedCell};
 pub use part::Part;
@@ -123,16 +125,25 @@ fn unphysical(b: &Candidate, table_mass_kg: f64) -> Option<String> {
 }
 
 /// Diagnose a campaign (see the module doc) after screening its records, on the channels
-/// it recorded (an effect whose signature needs a missing channel is not testable);
-/// refused (with the reason) when neither section 4 nor the closed-loop fit gives a
-/// complete baseline.
-pub fn diagnose(c: &Campaign, progress: Option<Progress>) -> Result<Diagnosis, String> {
+/// it recorded (an effect whose signature needs a missing channel is not testable), with
+/// the fits' `effort`; refused (with the reason) when neither section 4 nor the
+/// closed-loop fit gives a complete baseline.
+pub fn diagnose(
+    c: &Campaign,
+    effort: Effort,
+    progress: Option<Progress>,
+) -> Result<Diagnosis, String> {
     let screened = screen(c);
     let id = identify_screened(&screened);
     if let Some(why) = baseline_gaps(&screened.campaign, &id) {
         return Err(why);
     }
-    Ok(pipeline::diagnose_with(&screened.campaign, id, progress))
+    Ok(pipeline::diagnose_with(
+        &screened.campaign,
+        id,
+        effort,
+        progress,
+    ))
 }
 
 #[cfg(test)]

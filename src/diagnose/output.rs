@@ -1,6 +1,7 @@
 //! What diagnosis returns: the fitted candidates and the whole diagnosis.
 
 use super::effect::Effect;
+use super::effort::Effort;
 use super::evidence::EVIDENCE_SIGMAS;
 use super::residuals::{Cells, NoiseFloor, SCORE_WINDOW};
 use super::{EXPLAINED_RATIO, MISS_RATIO, REQUIRED_GAIN};
@@ -110,6 +111,8 @@ pub struct UnexplainedCell {
 /// The whole diagnosis.
 #[derive(Debug, Clone)]
 pub struct Diagnosis {
+    /// How hard its fits worked (a quick diagnosis is for the development loop).
+    pub effort: Effort,
     pub identification: Identification,
     pub baseline: Params,
     pub noise: NoiseFloor,
@@ -221,6 +224,7 @@ impl Diagnosis {
             .map(|(name, r)| (name.clone(), cells(r)))
             .collect();
         json!({
+            "effort": self.effort.name(),
             "cause": cause,
             "cause_rejected": self.cause_rejected,
             "parameters": parameters,

@@ -3,16 +3,16 @@
 //! of the fitting halves, the table the bounds scale to, and the report quarter's missed
 //! cells; then searches for causes, one effect at a time, until none passes.
 
-use super::baseline::{refine_output_error, BASELINE_ITERATIONS};
-use super::candidates::{fit_candidate, scored_candidate, Fitted, Hold, POLISH_ROUNDS};
+use super::baseline::refine_output_error;
+use super::candidates::{fit_candidate, scored_candidate, Fitted, Hold};
 use super::effect::{Effect, EFFECTS};
+use super::effort::Effort;
 use super::missed::Missed;
 use super::output::{Candidate, PartRows};
 use super::part::Part;
 use super::residuals::{ratios, simulate_test, Cells, NoiseFloor, Whitening};
 use super::{trace_enabled, unphysical, Progress, EXPLAINED_RATIO, REQUIRED_GAIN};
 use crate::campaign::Campaign;
-use crate::identify::lsq::LsqOptions;
 use crate::params::{ActuatorModel, Params};
 use rayon::prelude::*;
 
@@ -27,22 +27,10 @@ const SEARCH_STEPS: usize = EFFECTS.len() + 1;
 /// what the paper's test program separates.
 pub const MAX_CAUSES: usize = 3;
 
-/// Output-error iterations of one polish of the best candidate.
-const POLISH_ITERATIONS: usize = 6;
-
 /// A further polish round is taken only when the previous one cut the score by at least
 /// this factor's complement (5 %): the rounds exist for heavily saturated tables (seed
 /// 404), whose baseline is bent by tens of percent, not to chase the last digits.
 const POLISH_MIN_IMPROVEMENT: f64 = 0.95;
-
-/// The least-squares settings of the candidates' fits: 12 iterations bring an effect's
-/// parameters from an informed start to its valley; the tolerances are relative.
-const CANDIDATE_LSQ: LsqOptions = LsqOptions {
-    max_iterations: 12,
-    tolerance: 1e-4,
-    step: 1e-4,
-    parallel: false,
-};
 
 /// A candidate explains the selection quarter when its residual there is within
 /// [`EXPLAINED_RATIO`] (polishing stops there).
@@ -64,6 +52,8 @@ struct Diagnoser<'a> {
     report_missed: Missed,
     /// The catalogue effects the recorded channels can show.
     testable: Vec<Effect>,
+    /// Its fits' iteration caps and start counts.
+    effort: Effort,
     progress: Option<Progress<'a>>,
 }
 
@@ -103,7 +93,7 @@ impl Diagnoser<'_> {
             &self.table,
             &self.tests,
             &self.whitening,
-            BASELINE_ITERATIONS,
+            self.effort.baseline_iterations(),
         );
         match refined {
             Some(r) => {
@@ -180,7 +170,7 @@ impl Diagnoser<'_> {
                     &self.tests,
                     &self.tests,
                     &self.noise,
-                    CANDIDATE_LSQ,
+                    self.effort,
                     &self.whitening,
                     hold,
                 );
@@ -222,7 +212,7 @@ impl Diagnoser<'_> {
             &self.table,
             &self.tests,
             &self.whitening,
-            POLISH_ITERATIONS,
+            self.effort.polish_iterations(),
         )?;
         let theta = from.effect.read(&r.params);
         // the stick-slip polish holds the effect: its uncertainty is the fit's own (none
@@ -282,7 +272,7 @@ impl Diagnoser<'_> {
                 }
             }
         }
-        for _ in 1..POLISH_ROUNDS {
+        for _ in 1..self.effort.polish_rounds() {
             if explains(&best) {
                 break;
             }
@@ -308,7 +298,7 @@ impl Diagnoser<'_> {
     /// too; an unsettled model would credit them with that refit (a deadband of zero
     /// scored five times better than the accepted flow saturation it extended).
     fn settle(&self, mut best: Candidate, missed: &Missed, hold: &Hold) -> Candidate {
-        for _ in 0..POLISH_ROUNDS {
+        for _ in 0..self.effort.polish_rounds() {
             match self.polish(&best, best.params.actuator.model, missed, hold) {
                 Some(p) if p.score < POLISH_MIN_IMPROVEMENT * best.score => best = p,
                 Some(p) if p.score < best.score => return p,

@@ -2,7 +2,7 @@
 //! the extended model and its gain on held-out tests.
 
 use shaketable::campaign::format::read_campaign;
-use shaketable::diagnose::{diagnose, Channel};
+use shaketable::diagnose::{diagnose, Channel, Effort};
 use std::path::PathBuf;
 
 #[derive(clap::Args)]
@@ -28,6 +28,11 @@ pub struct Args {
     /// No progress bar.
     #[arg(long)]
     quiet: bool,
+    /// The quick diagnosis of the development loop: every step of the full one with
+    /// half the fit iterations (seconds on a short campaign); rougher numbers, not for
+    /// a decision.
+    #[arg(long)]
+    quick: bool,
 }
 
 pub fn run(args: Args) -> anyhow::Result<()> {
@@ -63,7 +68,12 @@ pub fn run(args: Args) -> anyhow::Result<()> {
             b.set_message(what.to_string());
         }
     };
-    let d = diagnose(&campaign, Some(&report));
+    let effort = if args.quick {
+        Effort::Quick
+    } else {
+        Effort::Full
+    };
+    let d = diagnose(&campaign, effort, Some(&report));
     if let Some(b) = &bar {
         b.finish_and_clear();
     }
@@ -79,6 +89,9 @@ pub fn run(args: Args) -> anyhow::Result<()> {
         args.campaign.display(),
         t0.elapsed().as_secs_f64()
     );
+    if d.effort == Effort::Quick {
+        println!("quick diagnosis: half the fit iterations, rougher numbers; not for a decision");
+    }
     println!("baseline from the {}", d.baseline_from());
     println!(
         "baseline: servovalve {}, actuator {}; noise floor from {}",

@@ -6,6 +6,7 @@ use super::{MAX_CAUSES, PROGRESS_SETUP, SEARCH_STEPS};
 use crate::campaign::{Campaign, Record};
 use crate::diagnose::candidates::heldout_scores;
 use crate::diagnose::effect::EFFECTS;
+use crate::diagnose::effort::Effort;
 use crate::diagnose::locate::unexplained_cells;
 use crate::diagnose::missed::Missed;
 use crate::diagnose::output::{Candidate, Cause, Diagnosis, Partial};
@@ -31,12 +32,13 @@ struct Found {
 pub(in crate::diagnose) fn diagnose_with(
     c: &Campaign,
     id: Identification,
+    effort: Effort,
     progress: Option<Progress>,
 ) -> Diagnosis {
     if let Some(p) = progress {
         p(0, PROGRESS_SETUP + SEARCH_STEPS, "identifying the baseline");
     }
-    let (mut d, spool_valve, not_testable) = Diagnoser::new(c, &id, progress);
+    let (mut d, spool_valve, not_testable) = Diagnoser::new(c, &id, effort, progress);
     d.tick(
         1,
         PROGRESS_SETUP + SEARCH_STEPS,
@@ -97,6 +99,7 @@ pub(in crate::diagnose) fn diagnose_with(
         valve_model: id.params.servovalve.model,
         actuator_model: base.actuator.model,
         actuator_costs,
+        effort,
         noise: d.noise,
         identification: id,
     }
@@ -111,6 +114,7 @@ impl<'a> Diagnoser<'a> {
     fn new(
         c: &'a Campaign,
         id: &Identification,
+        effort: Effort,
         progress: Option<Progress<'a>>,
     ) -> (Self, Servovalve, Vec<String>) {
         let noise = estimate_noise(c);
@@ -135,6 +139,7 @@ impl<'a> Diagnoser<'a> {
             tests,
             report_missed: Missed::default(),
             testable: testable.into_iter().map(|(e, _)| e).collect(),
+            effort,
             progress,
         };
         let why_not = not_testable
