@@ -64,9 +64,11 @@ pub(super) fn not_evidence(
 fn at_bound(x: f64, lo: f64, hi: f64) -> Option<&'static str> {
     let width = hi - lo;
     let near = |b: f64| (x - b).abs() <= AT_BOUND_FRACTION * width.min(b.abs().max(width * 1e-6));
-    if near(lo) {
+    // beyond a bound counts as at it: a fit the range did not hold (a start from a grid
+    // past its edge) is no more evidence than one it stopped
+    if x <= lo || near(lo) {
         Some("lower bound")
-    } else if near(hi) {
+    } else if x >= hi || near(hi) {
         Some("upper bound")
     } else {
         None
@@ -107,6 +109,24 @@ mod tests {
     }
 
     /// A deadband of 1e-4 +- 1e-4 cannot be told from none; 1e-2 +- 1e-3 can.
+    /// A fit the range did not hold (stick-slip's grid once refined past its edge to a
+    /// static ratio of 8.5 on a range up to 6) is not evidence either.
+    #[test]
+    fn a_parameter_beyond_a_bound_is_not_evidence() {
+        let (lo, hi) = ([1.0, 1e-4], [6.0, 0.05]);
+        let beyond = map(&[("static_ratio", 8.5), ("stribeck_velocity_m_s", 0.01)]);
+        let why = not_evidence(Effect::StickSlip, &beyond, &map(&[]), &lo, &hi).unwrap();
+        assert!(
+            why.contains("static_ratio") && why.contains("upper bound"),
+            "{why}"
+        );
+        let inside = map(&[("static_ratio", 2.0), ("stribeck_velocity_m_s", 0.01)]);
+        assert_eq!(
+            not_evidence(Effect::StickSlip, &inside, &map(&[]), &lo, &hi),
+            None
+        );
+    }
+
     #[test]
     fn a_strength_within_two_sigma_of_no_effect_is_not_evidence() {
         let (lo, hi) = ([0.0], [0.2]);

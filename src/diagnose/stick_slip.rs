@@ -41,11 +41,12 @@ pub(super) fn fit_stick_slip(
         }
     };
     let eval = eval_on(*base);
+    let bounds = e.bounds(base);
     let start = match stribeck::fit_curve(&stribeck::measured_curve(c, base, sig)) {
         Some([f_mu, r, v]) => [r.clamp(1.05, 6.0), v.clamp(3e-4, 0.03), f_mu],
-        None => grid_stick_slip(&eval, base.friction.force_n)?,
+        None => grid_stick_slip(&eval, base.friction.force_n, &bounds)?,
     };
-    let mut best = polish_stick_slip(&eval, start)?;
+    let mut best = polish_stick_slip(&eval, start, &bounds)?;
     if best.1[0] < 1.0 + NEGLIGIBLE_STATIC_EXCESS {
         // no static peak: nothing bent the baseline
         return Some(best);
@@ -60,6 +61,7 @@ pub(super) fn fit_stick_slip(
         let next = polish_stick_slip(
             &eval_on(unbent),
             [best.1[0], best.1[1], unbent.friction.force_n],
+            &bounds,
         )?;
         if next.0 >= best.0 {
             break;
@@ -78,8 +80,14 @@ pub(super) const NEGLIGIBLE_STATIC_EXCESS: f64 = 0.05;
 pub(super) const UNBENDING_ROUNDS: usize = 2;
 
 /// `[r_s, v_s, F_mu]` from a grid over (static ratio, Stribeck velocity) with geometric
-/// steps, refined twice around the best point, then five friction amplitudes.
-pub(super) fn grid_stick_slip(eval: &StickSlipEval, f0: f64) -> Option<[f64; 3]> {
+/// steps, refined twice around the best point (kept within the fitting `bounds`: a
+/// refinement step past the coarse grid's edge once landed at a static ratio of 8.5),
+/// then five friction amplitudes.
+pub(super) fn grid_stick_slip(
+    eval: &StickSlipEval,
+    f0: f64,
+    bounds: &(Vec<f64>, Vec<f64>),
+) -> Option<[f64; 3]> {
     let best_of = |pts: Vec<(f64, f64, f64)>| {
         pts.par_iter()
             .map(|&(r, v, f)| eval(r, v, f))
@@ -95,14 +103,15 @@ pub(super) fn grid_stick_slip(eval: &StickSlipEval, f0: f64) -> Option<[f64; 3]>
         .flat_map(|&r| speeds.iter().map(move |&v| (r, v, f0)))
         .collect();
     let (_, mut t, _) = best_of(coarse)?;
+    let (lower, upper) = bounds;
     for refinement in [0.5, 0.25] {
         let (r0, v0) = (t[0] - 1.0, t[1]);
         let mut fine = Vec::new();
         for i in -1..=1 {
             for j in -1..=1 {
                 fine.push((
-                    1.0 + r0 * sr.powf(refinement * i as f64),
-                    v0 * sv.powf(refinement * j as f64),
+                    (1.0 + r0 * sr.powf(refinement * i as f64)).clamp(lower[0], upper[0]),
+                    (v0 * sv.powf(refinement * j as f64)).clamp(lower[1], upper[1]),
                     f0,
                 ));
             }
@@ -122,10 +131,12 @@ pub(super) fn grid_stick_slip(eval: &StickSlipEval, f0: f64) -> Option<[f64; 3]>
 /// Nelder-Mead (argmin) over `(ln(r_s - 1), ln v_s, ln F_mu)` from `start`: the score is
 /// smooth but its finite-difference gradient is not trustworthy at chatter onset, and
 /// three parameters need no more than a few dozen evaluations. Returns the best point
-/// seen (the start itself when nothing beats it).
+/// seen (the start itself when nothing beats it). `bounds` are the effect's fitting
+/// bounds (lower, upper: static ratio, Stribeck velocity).
 pub(super) fn polish_stick_slip(
     eval: &StickSlipEval,
     start: [f64; 3],
+    bounds: &(Vec<f64>, Vec<f64>),
 ) -> Option<(f64, Vec<f64>, Params)> {
     use argmin::core::{CostFunction, Executor};
     use argmin::solver::neldermead::NelderMead;
@@ -133,14 +144,14 @@ pub(super) fn polish_stick_slip(
     fn point(x: &[f64]) -> (f64, f64, f64) {
         (1.0 + x[0].exp(), x[1].exp(), x[2].exp())
     }
-    struct Score<'a, 'b>(&'a StickSlipEval<'b>);
+    struct Score<'a, 'b>(&'a StickSlipEval<'b>, &'a (Vec<f64>, Vec<f64>));
     impl CostFunction for Score<'_, '_> {
         type Param = Vec<f64>;
         type Output = f64;
         fn cost(&self, x: &Vec<f64>) -> Result<f64, argmin::core::Error> {
             let (r, v, f) = point(x);
-            // Effect::StickSlip's bounds
-            if !(r <= 6.0 && (1e-4..=0.05).contains(&v)) {
+            let (lower, upper) = self.1;
+            if !((lower[0]..=upper[0]).contains(&r) && (lower[1]..=upper[1]).contains(&v)) {
                 return Ok(f64::INFINITY);
             }
             Ok((self.0)(r, v, f).0)
@@ -159,7 +170,7 @@ pub(super) fn polish_stick_slip(
     let solver = NelderMead::new(simplex)
         .with_sd_tolerance(1e-3 * first.0)
         .ok()?;
-    let best = Executor::new(Score(eval), solver)
+    let best = Executor::new(Score(eval, bounds), solver)
         .configure(|s| s.max_iters(25))
         .run()
         .ok()
