@@ -37,6 +37,7 @@ mod effect;
 mod evidence;
 mod locate;
 mod missed;
+pub mod model_error;
 mod output;
 mod part;
 mod pipeline;
@@ -47,6 +48,7 @@ pub mod stribeck;
 
 pub use effect::{Effect, EFFECTS};
 pub use locate::{Dependence, Split};
+pub use model_error::{model_error_response, ModelErrorResponse, NoResponse, ResponseEstimate};
 pub use output::{Candidate, Cause, Diagnosis, PartRows, Partial, UnexplainedCell};
 pub use part::Part;
 
