@@ -48,7 +48,10 @@ pub mod stribeck;
 
 pub use effect::{Effect, EFFECTS};
 pub use locate::{Dependence, Split};
-pub use model_error::{model_error_response, ModelErrorResponse, NoResponse, ResponseEstimate};
+pub use model_error::{
+    model_error_response, unexplained_responses, CellResponse, ModelErrorPeak, ModelErrorResponse,
+    NoResponse, ResponseEstimate,
+};
 pub use output::{Candidate, Cause, Diagnosis, PartRows, Partial, UnexplainedCell};
 pub use part::Part;
 

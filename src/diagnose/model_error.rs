@@ -15,10 +15,11 @@
 //! the normal approximation holds for `eps` below about 0.2 and widens honestly beyond.
 
 use super::residuals::{padded, simulate_test, Channel, FIT_MAX_HZ};
-use super::Part;
+use super::{Diagnosis, Part};
 use crate::campaign::{Campaign, Control, Record};
 use crate::identify::frf::{FrfError, Welch, WelchOptions};
 use crate::params::Params;
+use serde::Serialize;
 
 /// Finest frequency resolution asked for, Hz: the identification's, fine enough to place
 /// a mode of a few Hz within a tenth of its frequency.
@@ -33,9 +34,10 @@ const WANTED_AVERAGES: usize = 16;
 /// Fewest averages with which a response is given at all: with fewer, the gain's random
 /// error exceeds 0.25 even at coherence 0.5 and the band says little.
 const MIN_AVERAGES: usize = 8;
-/// Equivalent independent averages per Hann segment at 50 % overlap: adjacent segments'
-/// spectra correlate by 0.167 in power, so K segments average like
-/// `K / (1 + 2 * 0.167^2)` independent ones (Welch 1967).
+/// Equivalent independent averages per Hann segment at 50 % overlap: the overlap
+/// correlation of adjacent Hann segments is 0.167 (F. J. Harris, Proc. IEEE 66, 1978,
+/// Table I) and enters the variance squared, so K segments average like
+/// `K / (1 + 2 * 0.167^2)` independent ones (P. D. Welch, IEEE Trans. AU-15, 1967).
 const OVERLAP_EFFICIENCY: f64 = 1.0 / (1.0 + 2.0 * 0.167 * 0.167);
 /// Normal quantile of the band: about 95 % two-sided.
 pub const BAND_SIGMAS: f64 = 2.0;
@@ -88,6 +90,8 @@ impl ResponseEstimate {
 pub enum NoResponse {
     #[error("no test {0}")]
     NoTest(String),
+    #[error("no channel {0}")]
+    NoChannel(String),
     #[error("test {test} did not record the {channel} channel")]
     MissingChannel { test: String, channel: &'static str },
     #[error("the model's run of {test} stopped at {time_s:.2} s ({reason})")]
@@ -166,6 +170,69 @@ pub fn model_error_response(
         ),
         estimate,
     })
+}
+
+impl ModelErrorResponse {
+    /// The peak of the response ([`ResponseEstimate::peak`]) with what it is of.
+    pub fn peak(&self) -> Option<ModelErrorPeak> {
+        let (frequency_hz, gain, coherence) = self.estimate.peak()?;
+        Some(ModelErrorPeak {
+            test: self.test.clone(),
+            channel: self.channel.name(),
+            input: self.input,
+            unit: self.unit.clone(),
+            frequency_hz,
+            gain,
+            coherence,
+        })
+    }
+}
+
+/// Where a model-error response peaks: the diagnosis JSON's `model_error_peak`.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct ModelErrorPeak {
+    pub test: String,
+    pub channel: &'static str,
+    pub input: &'static str,
+    /// Unit of the gain.
+    pub unit: String,
+    pub frequency_hz: f64,
+    pub gain: f64,
+    pub coherence: f64,
+}
+
+/// One unexplained cell's model-error response, or why it has none.
+#[derive(Debug)]
+pub struct CellResponse {
+    pub test: String,
+    pub channel: String,
+    pub response: Result<ModelErrorResponse, NoResponse>,
+}
+
+/// The extended model's model-error responses on `d`'s unexplained cells, worst first,
+/// until `max` cells have one (none when the data is explained); the cells tried on the
+/// way are kept with why they have none.
+pub fn unexplained_responses(d: &Diagnosis, c: &Campaign, max: usize) -> Vec<CellResponse> {
+    let mut out = Vec::new();
+    let mut found = 0;
+    for u in d.unexplained.iter().filter(|_| !d.explained) {
+        if found >= max {
+            break;
+        }
+        let i = c.info.tests.iter().position(|t| t.name == u.test);
+        let response = match (i, Channel::named(&u.channel)) {
+            (None, _) => Err(NoResponse::NoTest(u.test.clone())),
+            (_, None) => Err(NoResponse::NoChannel(u.channel.clone())),
+            (Some(i), Some(ch)) => model_error_response(&d.extended, c, i, ch),
+        };
+        found += usize::from(response.is_ok());
+        out.push(CellResponse {
+            test: u.test.clone(),
+            channel: u.channel.clone(),
+            response,
+        });
+    }
+    out
 }
 
 /// The reference the test's controller follows, by its campaign-format name.
