@@ -6,6 +6,7 @@
 
 use shaketable::campaign::synth::{synthesise, SynthOptions};
 use shaketable::diagnose::{model_error_response, Channel};
+use shaketable::report::plot::{gain_band_png, GainBand};
 use shaketable::Params;
 
 const SPECIMEN_HZ: f64 = 5.0;
@@ -44,6 +45,24 @@ fn a_missing_specimen_shows_as_a_peak_at_its_frequency() {
     // the apparent mass at resonance, 15 t / (2 zeta) = 150 t, give or take the
     // resolution's smoothing of a peak 0.5 Hz wide
     assert!(gain > 5e4 && gain < 3e5, "{gain}");
+    // the report's figure of it draws (kept in cargo's scratch folder to look at)
+    let png = std::path::Path::new(env!("CARGO_TARGET_TMPDIR")).join("model_error_R2_force.png");
+    let e = &m.estimate;
+    gain_band_png(
+        &png,
+        "R2: model-error response without the specimen",
+        &format!("gain ({})", m.unit),
+        "2-sigma band",
+        &GainBand {
+            frequency_hz: &e.frequency_hz,
+            gain: &e.gain,
+            lower: &e.lower,
+            upper: &e.upper,
+            coherence: &e.coherence,
+        },
+    )
+    .unwrap();
+    assert!(std::fs::metadata(&png).unwrap().len() > 10_000);
     // the truth itself leaves only noise: no coherent peak stands out like the specimen's
     let m = model_error_response(&truth, &c, r2, Channel::Force).unwrap();
     let largest_coherence = m.estimate.coherence.iter().fold(0.0, |a: f64, &b| a.max(b));

@@ -227,6 +227,18 @@ fn draw_xy(
     root.present().map_err(|e| err(e.to_string()))
 }
 
+/// An axis label: plain between 0.01 and 10 000, in powers of ten beyond (a gain in
+/// N/(m/s^2) runs to 1e5, one in m/m to 1e-3).
+fn axis_number(v: f64) -> String {
+    if v == 0.0 {
+        "0".into()
+    } else if (1e-2..1e4).contains(&v.abs()) {
+        format!("{v:.2}")
+    } else {
+        format!("{v:.2e}")
+    }
+}
+
 /// A gain against frequency with its confidence band and the coherence it rests on.
 pub struct GainBand<'a> {
     pub frequency_hz: &'a [f64],
@@ -288,6 +300,7 @@ fn draw_gain_band(
     chart
         .configure_mesh()
         .y_desc(gain_label)
+        .y_label_formatter(&|v| axis_number(*v))
         .draw()
         .map_err(|e| err(e.to_string()))?;
     let clip = |v: f64| if v.is_finite() { v.min(y_hi) } else { y_hi };
