@@ -38,6 +38,7 @@ mod effort;
 mod evidence;
 mod locate;
 mod missed;
+pub mod model_error;
 mod output;
 mod part;
 mod pipeline;
@@ -49,6 +50,10 @@ pub mod stribeck;
 pub use effect::{Effect, EFFECTS};
 pub use effort::Effort;
 pub use locate::{Dependence, Split};
+pub use model_error::{
+    model_error_response, unexplained_responses, CellResponse, ModelErrorPeak, ModelErrorResponse,
+    NoResponse, ResponseEstimate,
+};
 pub use output::{Candidate, Cause, Diagnosis, PartRows, Partial, UnexplainedCell};
 pub use part::Part;
 

@@ -1,6 +1,7 @@
 //! The diagnosis report: the baseline's residual per test and channel against the noise
 //! floor (a heat-map table), every candidate with its parameters and held-out residual,
-//! the chosen cause, and before/after overlays of the worst tests and of the table TF.
+//! the chosen cause, where the residual left lies with the model-error response of the
+//! worst cells it is in, and before/after overlays of the worst tests and of the table TF.
 
 use crate::campaign::Campaign;
 use crate::diagnose::{padded, simulate_test, Channel, Diagnosis, Part};
@@ -228,6 +229,7 @@ pub fn write(dir: &Path, c: &Campaign, d: &Diagnosis) -> Result<(), super::Repor
     }
     html.push_str("</table>");
     super::diagnose_causes::write_causes(&mut html, &mut md, d);
+    super::diagnose_model_error::write_model_error(dir, c, d, &mut html, &mut md)?;
     html.push_str("<h2>Candidates of the first search</h2><table><tr><th>effect</th><th>parameters</th><th>report residual</th><th>selection score</th></tr>");
     md.push_str("\n## Candidates of the first search\n\n| effect | parameters | report residual | selection score |\n|---|---|---|---|\n");
     let _ = write!(

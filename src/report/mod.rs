@@ -5,6 +5,7 @@ pub mod closed_loop;
 mod device;
 pub mod diagnose;
 mod diagnose_causes;
+mod diagnose_model_error;
 pub mod identify;
 pub mod page;
 pub mod plot;

@@ -226,3 +226,126 @@ fn draw_xy(
         .map_err(|e| err(e.to_string()))?;
     root.present().map_err(|e| err(e.to_string()))
 }
+
+/// An axis label: plain between 0.01 and 10 000, in powers of ten beyond (a gain in
+/// N/(m/s^2) runs to 1e5, one in m/m to 1e-3).
+fn axis_number(v: f64) -> String {
+    if v == 0.0 {
+        "0".into()
+    } else if (1e-2..1e4).contains(&v.abs()) {
+        format!("{v:.2}")
+    } else {
+        format!("{v:.2e}")
+    }
+}
+
+/// A gain against frequency with its confidence band and the coherence it rests on.
+pub struct GainBand<'a> {
+    pub frequency_hz: &'a [f64],
+    pub gain: &'a [f64],
+    pub lower: &'a [f64],
+    pub upper: &'a [f64],
+    pub coherence: &'a [f64],
+}
+
+/// Upper limit of a band figure's gain axis, in largest gains: a band that reaches
+/// infinity where the coherence vanishes would otherwise flatten the gain to nothing.
+const BAND_AXIS_GAINS: f64 = 2.0;
+
+/// The gain of `band` (line) with the band shaded, over a log frequency axis, above its
+/// coherence; `gain_label` names the gain's unit, `band_label` the band.
+pub fn gain_band_png(
+    path: &Path,
+    title: &str,
+    gain_label: &str,
+    band_label: &str,
+    band: &GainBand,
+) -> Result<(), PlotError> {
+    write_png(path, |tmp| {
+        draw_gain_band(tmp, title, gain_label, band_label, band)
+    })
+}
+
+fn draw_gain_band(
+    path: &Path,
+    title: &str,
+    gain_label: &str,
+    band_label: &str,
+    band: &GainBand,
+) -> Result<(), PlotError> {
+    let err = |e: String| PlotError {
+        path: path.display().to_string(),
+        message: e,
+    };
+    let f = band.frequency_hz;
+    let (Some(&f_lo), Some(&f_hi)) = (f.first(), f.last()) else {
+        return Err(err("no frequencies".into()));
+    };
+    let f_hi = f_hi.max(f_lo * 1.01);
+    let (_, gain_hi) = range(band.gain.iter().copied(), 0.0);
+    let (_, upper_hi) = range(band.upper.iter().copied(), 0.0);
+    let y_hi = 1.05 * upper_hi.min(BAND_AXIS_GAINS * gain_hi);
+    // a gain of zero everywhere still gets an axis
+    let y_hi = if y_hi > 0.0 { y_hi } else { 1.0 };
+    let root = BitMapBackend::new(path, SIZE).into_drawing_area();
+    root.fill(&WHITE).map_err(|e| err(e.to_string()))?;
+    let (top, bottom) = root.split_vertically(SIZE.1 * 2 / 3);
+    let mut chart = ChartBuilder::on(&top)
+        .caption(title, ("sans-serif", 22))
+        .margin(10)
+        .x_label_area_size(30)
+        .y_label_area_size(80)
+        .build_cartesian_2d((f_lo..f_hi).log_scale(), 0.0..y_hi)
+        .map_err(|e| err(e.to_string()))?;
+    chart
+        .configure_mesh()
+        .y_desc(gain_label)
+        .y_label_formatter(&|v| axis_number(*v))
+        .draw()
+        .map_err(|e| err(e.to_string()))?;
+    let clip = |v: f64| if v.is_finite() { v.min(y_hi) } else { y_hi };
+    let outline: Vec<(f64, f64)> = f
+        .iter()
+        .zip(band.upper)
+        .map(|(a, b)| (*a, clip(*b)))
+        .chain(f.iter().zip(band.lower).rev().map(|(a, b)| (*a, clip(*b))))
+        .collect();
+    let shade = color(0).mix(0.25);
+    chart
+        .draw_series(std::iter::once(Polygon::new(outline, shade.filled())))
+        .map_err(|e| err(e.to_string()))?
+        .label(band_label)
+        .legend(move |(x, y)| Rectangle::new([(x, y - 5), (x + 20, y + 5)], shade.filled()));
+    let line = color(0);
+    chart
+        .draw_series(LineSeries::new(
+            f.iter().zip(band.gain).map(|(a, b)| (*a, clip(*b))),
+            line.stroke_width(2),
+        ))
+        .map_err(|e| err(e.to_string()))?
+        .label("gain")
+        .legend(move |(x, y)| PathElement::new(vec![(x, y), (x + 20, y)], line.stroke_width(2)));
+    chart
+        .configure_series_labels()
+        .background_style(WHITE.mix(0.8))
+        .border_style(BLACK)
+        .draw()
+        .map_err(|e| err(e.to_string()))?;
+    let mut coh = ChartBuilder::on(&bottom)
+        .margin(10)
+        .x_label_area_size(40)
+        .y_label_area_size(80)
+        .build_cartesian_2d((f_lo..f_hi).log_scale(), 0.0..1.0)
+        .map_err(|e| err(e.to_string()))?;
+    coh.configure_mesh()
+        .x_desc("frequency (Hz)")
+        .y_desc("coherence")
+        .draw()
+        .map_err(|e| err(e.to_string()))?;
+    coh.draw_series(LineSeries::new(
+        f.iter().zip(band.coherence).map(|(a, b)| (*a, *b)),
+        color(5).stroke_width(2),
+    ))
+    .map_err(|e| err(e.to_string()))?;
+    root.present().map_err(|e| err(e.to_string()))
+}

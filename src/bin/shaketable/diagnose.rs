@@ -2,7 +2,7 @@
 //! the extended model and its gain on held-out tests.
 
 use shaketable::campaign::format::read_campaign;
-use shaketable::diagnose::{diagnose, Channel, Effort};
+use shaketable::diagnose::{diagnose, unexplained_responses, Channel, Effort};
 use std::path::PathBuf;
 
 #[derive(clap::Args)]
@@ -159,7 +159,13 @@ pub fn run(args: Args) -> anyhow::Result<()> {
             p.why_not_a_cause
         );
     }
-    let j = d.to_json();
+    let mut j = d.to_json();
+    // issue 17 part 4: where the worst unexplained cell's model-error response peaks
+    // (null when explained or when no cell has a response)
+    let peak = unexplained_responses(&d, &campaign, 1)
+        .into_iter()
+        .find_map(|c| c.response.ok()?.peak());
+    j["model_error_peak"] = serde_json::to_value(&peak)?;
     println!(
         "cause: {}  gain {:.2}  explained {}  parameters {}",
         j["cause"].as_str().unwrap_or("none"),
@@ -171,6 +177,12 @@ pub fn run(args: Args) -> anyhow::Result<()> {
         println!(
             "  unexplained: {} {} residual {:.2}, worst in {:.0}-{:.0} Hz ({:.2})",
             u.test, u.channel, u.residual, u.band_hz[0], u.band_hz[1], u.band_residual
+        );
+    }
+    if let Some(p) = &peak {
+        println!(
+            "  model-error response of {} {} (per {}) peaks at {:.2} Hz: gain {:.3e} {}, coherence {:.2}",
+            p.test, p.channel, p.input, p.frequency_hz, p.gain, p.unit, p.coherence
         );
     }
     if let Some(note) = d.structure_change() {
