@@ -47,19 +47,12 @@ fn a_missing_specimen_shows_as_a_peak_at_its_frequency() {
     assert!(gain > 5e4 && gain < 3e5, "{gain}");
     // the report's figure of it draws (kept in cargo's scratch folder to look at)
     let png = std::path::Path::new(env!("CARGO_TARGET_TMPDIR")).join("model_error_R2_force.png");
-    let e = &m.estimate;
     gain_band_png(
         &png,
         "R2: model-error response without the specimen",
         &format!("gain ({})", m.unit),
         "2-sigma band",
-        &GainBand {
-            frequency_hz: &e.frequency_hz,
-            gain: &e.gain,
-            lower: &e.lower,
-            upper: &e.upper,
-            coherence: &e.coherence,
-        },
+        &GainBand::from(&m.estimate),
     )
     .unwrap();
     assert!(std::fs::metadata(&png).unwrap().len() > 10_000);

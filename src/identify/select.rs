@@ -123,6 +123,22 @@ fn best_by(candidates: &[usize], key: impl Fn(usize) -> (bool, bool, f64)) -> Op
 /// when the campaign has no other (one white-noise test gives the valve, the mass and
 /// the oil column); the oil column avoids the mass test when another test can serve.
 pub fn random_roles(c: &Campaign) -> RandomRoles {
+    roles_recording(c, [VALVE_NEEDS, MASS_NEEDS, OIL_COLUMN_NEEDS])
+}
+
+/// The random tests' roles by what they excite alone (control, band, strength), whatever
+/// channels they recorded: where an effect's signature lives in the diagnosis, which must
+/// not move to other tests when a channel is missing (a clean table recorded by its
+/// displacement alone lost the mass test from flow asymmetry's tests, and the fit on the
+/// fast sines alone named an asymmetry of 0.94).
+pub fn excitation_roles(c: &Campaign) -> RandomRoles {
+    roles_recording(c, [&[], &[], &[]])
+}
+
+/// The random tests' roles among the tests recording what each role `needs` (valve, mass,
+/// oil column).
+fn roles_recording(c: &Campaign, needs: [&'static [Measured]; 3]) -> RandomRoles {
+    let [valve_needs, mass_needs, oil_column_needs] = needs;
     let random: Vec<usize> = (0..c.info.tests.len())
         .filter(|&i| c.info.tests[i].kind == TestKind::Random)
         .collect();
@@ -135,18 +151,18 @@ pub fn random_roles(c: &Campaign) -> RandomRoles {
             .filter(|&i| c.records[i].has_all(needs))
             .collect()
     };
-    let with_spool = recording(VALVE_NEEDS);
+    let with_spool = recording(valve_needs);
     let valve = best_by(&with_spool, |i| {
         (control(i) == Control::Displacement, true, band_top_hz(c, i))
     });
-    let mass = best_by(&recording(MASS_NEEDS), |i| {
+    let mass = best_by(&recording(mass_needs), |i| {
         let strength = rms(c.records[i]
             .acceleration_m_s2
             .as_deref()
             .unwrap_or_default());
         (control(i) == Control::Acceleration, true, strength)
     });
-    let oil_column = best_by(&recording(OIL_COLUMN_NEEDS), |i| {
+    let oil_column = best_by(&recording(oil_column_needs), |i| {
         let band = band_top_hz(c, i);
         (
             Some(i) != mass && has_spool(i),

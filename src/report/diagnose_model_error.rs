@@ -108,7 +108,6 @@ fn caption(m: &ModelErrorResponse) -> String {
 /// Draw the response of `m`; its file name in the report folder.
 fn figure(dir: &Path, m: &ModelErrorResponse) -> Result<String, ReportError> {
     let file = safe_file_name(&format!("model_error_{}_{}.png", m.test, m.channel.name()));
-    let e = &m.estimate;
     gain_band_png(
         &dir.join(&file),
         &format!(
@@ -119,13 +118,7 @@ fn figure(dir: &Path, m: &ModelErrorResponse) -> Result<String, ReportError> {
         ),
         &format!("gain ({})", m.unit),
         &format!("{BAND_SIGMAS}-sigma band (~95 %)"),
-        &GainBand {
-            frequency_hz: &e.frequency_hz,
-            gain: &e.gain,
-            lower: &e.lower,
-            upper: &e.upper,
-            coherence: &e.coherence,
-        },
+        &GainBand::from(&m.estimate),
     )?;
     Ok(file)
 }

@@ -252,6 +252,19 @@ pub struct GainBand<'a> {
 /// infinity where the coherence vanishes would otherwise flatten the gain to nothing.
 const BAND_AXIS_GAINS: f64 = 2.0;
 
+/// The band of a model-error response estimate.
+impl<'a> From<&'a crate::diagnose::model_error::ResponseEstimate> for GainBand<'a> {
+    fn from(e: &'a crate::diagnose::model_error::ResponseEstimate) -> Self {
+        GainBand {
+            frequency_hz: &e.frequency_hz,
+            gain: &e.gain,
+            lower: &e.lower,
+            upper: &e.upper,
+            coherence: &e.coherence,
+        }
+    }
+}
+
 /// The gain of `band` (line) with the band shaded, over a log frequency axis, above its
 /// coherence; `gain_label` names the gain's unit, `band_label` the band.
 pub fn gain_band_png(
