@@ -137,11 +137,7 @@ fn draw_bode(
         .label(c.label)
         .legend(move |(x, y)| PathElement::new(vec![(x, y), (x + 20, y)], col.stroke_width(2)));
     }
-    mag.configure_series_labels()
-        .background_style(WHITE.mix(0.8))
-        .border_style(BLACK)
-        .draw()
-        .map_err(|e| err(e.to_string()))?;
+    draw_legend(&mut mag).map_err(err)?;
     let mut ph = ChartBuilder::on(&bottom)
         .margin(10)
         .x_label_area_size(40)
@@ -218,13 +214,20 @@ fn draw_xy(
         anno.label(s.label)
             .legend(move |(x, y)| PathElement::new(vec![(x, y), (x + 20, y)], col.stroke_width(2)));
     }
+    draw_legend(&mut chart).map_err(err)?;
+    root.present().map_err(|e| err(e.to_string()))
+}
+
+/// The series' legend of `chart`, boxed on a light background (every figure's).
+fn draw_legend<'a, DB: DrawingBackend + 'a, CT: CoordTranslate>(
+    chart: &mut ChartContext<'a, DB, CT>,
+) -> Result<(), String> {
     chart
         .configure_series_labels()
         .background_style(WHITE.mix(0.8))
         .border_style(BLACK)
         .draw()
-        .map_err(|e| err(e.to_string()))?;
-    root.present().map_err(|e| err(e.to_string()))
+        .map_err(|e| e.to_string())
 }
 
 /// An axis label: plain between 0.01 and 10 000, in powers of ten beyond (a gain in
@@ -338,12 +341,7 @@ fn draw_gain_band(
         .map_err(|e| err(e.to_string()))?
         .label("gain")
         .legend(move |(x, y)| PathElement::new(vec![(x, y), (x + 20, y)], line.stroke_width(2)));
-    chart
-        .configure_series_labels()
-        .background_style(WHITE.mix(0.8))
-        .border_style(BLACK)
-        .draw()
-        .map_err(|e| err(e.to_string()))?;
+    draw_legend(&mut chart).map_err(err)?;
     let mut coh = ChartBuilder::on(&bottom)
         .margin(10)
         .x_label_area_size(40)
