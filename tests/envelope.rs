@@ -82,7 +82,7 @@ fn no_delta_p_feedback_is_an_unstable_oil_column() {
     let mut q = p;
     q.controller.kdp = 0.0;
     let lin = shaketable::linear::Linearisation::new(&q);
-    let unstable = lin.unstable_poles();
+    let unstable = lin.unstable_poles().unwrap();
     assert_eq!(unstable.len(), 1, "{unstable:?}");
     let pole = unstable[0];
     assert!((10.0..16.0).contains(&pole.frequency_hz), "{pole:?}");
@@ -136,4 +136,22 @@ fn physically_absurd_parameters_are_refused() {
     }
     let p = Params::from_toml_str("[limits]\nstroke_m = 0.25\n", "lab.toml").unwrap();
     assert_eq!(p.limits.stroke_m, 0.25);
+}
+
+/// Parameters nobody validated (a non-finite gain) or absurd ones (a gain of 1e300) give
+/// no poles rather than an eigenvalue iteration that never returns, and the stability
+/// warning says stability is unknown.
+#[test]
+fn poles_that_cannot_be_computed_are_none_and_said() {
+    let mut q = Params::trees_lab();
+    q.controller.kp = f64::NAN;
+    let lin = shaketable::linear::Linearisation::new(&q);
+    assert_eq!(lin.poles(), None);
+    let w = stability_warning(&q).expect("a warning");
+    assert!(w.contains("could not be computed"), "{w}");
+    for kp in [1e300, f64::MAX] {
+        q.controller.kp = kp;
+        // either no poles or unstable ones, and a warning either way
+        assert!(stability_warning(&q).is_some(), "kp {kp}");
+    }
 }

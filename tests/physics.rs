@@ -116,6 +116,7 @@ fn foundation_adds_a_resonance_and_separates_lvdt_from_absolute() {
     let oscillatory = |p: &Params| {
         Linearisation::new(p)
             .poles()
+            .unwrap()
             .into_iter()
             .filter(|q| q.im > 0.0 && -q.re / q.norm() < 0.3)
             .map(|q| q.norm() / (2.0 * std::f64::consts::PI))

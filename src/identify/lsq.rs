@@ -190,6 +190,10 @@ impl LsqFit {
 /// reach), which leaves eigenvalues at rounding level, 1e-16; 1e-12 keeps a margin above.
 const NULL_EIGENVALUE: f64 = 1e-12;
 
+/// Most QR sweeps of the eigen-decomposition: a few per eigenvalue suffice for the at
+/// most dozen parameters of a fit, so a thousand is a wide margin that still returns.
+const EIGEN_ITERATION_LIMIT: usize = 1000;
+
 /// A parameter whose squared share of a null direction exceeds this is not identified.
 const NULL_SHARE: f64 = 1e-6;
 
@@ -204,7 +208,15 @@ fn singular_sigma(jtj: DMatrix<f64>, s2: f64) -> Vec<f64> {
     let d: Vec<f64> = live.iter().map(|&i| jtj[(i, i)].sqrt()).collect();
     let m = live.len();
     let scaled = DMatrix::from_fn(m, m, |a, b| jtj[(live[a], live[b])] / (d[a] * d[b]));
-    let eig = nalgebra::SymmetricEigen::new(scaled);
+    // nalgebra's `SymmetricEigen::new` iterates without limit and never returns on a
+    // non-finite matrix: such a fit's uncertainty is unknown, so infinite
+    let eig = match scaled.iter().all(|x| x.is_finite()) {
+        true => nalgebra::SymmetricEigen::try_new(scaled, f64::EPSILON, EIGEN_ITERATION_LIMIT),
+        false => None,
+    };
+    let Some(eig) = eig else {
+        return vec![f64::INFINITY; n];
+    };
     let null = |j: usize| !(eig.eigenvalues[j] > NULL_EIGENVALUE);
     let mut sigma = vec![f64::INFINITY; n];
     for (a, &i) in live.iter().enumerate() {
@@ -267,6 +279,16 @@ pub fn linear(a: &DMatrix<f64>, b: &DVector<f64>) -> Option<(DVector<f64>, Vec<f
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// A singular `J^T J` with a non-finite entry (an infinite diagonal divides to NaN)
+    /// gives infinite sigmas at once rather than an endless eigen-iteration.
+    #[test]
+    fn a_non_finite_normal_matrix_has_unknown_sigma() {
+        let mut jtj = DMatrix::from_element(3, 3, 1.0);
+        jtj[(1, 1)] = f64::INFINITY;
+        let sigma = singular_sigma(jtj, 1.0);
+        assert!(sigma.iter().all(|s| s.is_infinite()), "{sigma:?}");
+    }
 
     /// A singular `J^T J` (one parameter that never reaches the residual): that one's
     /// sigma is infinite, the others' are those of the fit without it.

@@ -188,12 +188,22 @@ impl Linearisation {
         (a, bin)
     }
 
-    /// Closed-loop poles, sorted by frequency (rad/s).
-    pub fn poles(&self) -> Vec<Complex64> {
+    /// Closed-loop poles, sorted by frequency (rad/s); `None` when they cannot be
+    /// computed: a non-finite entry in the state matrix (parameters nobody validated) or
+    /// an eigenvalue iteration that does not converge. nalgebra's plain
+    /// `complex_eigenvalues` iterates without a limit and never returns on such a matrix.
+    pub fn poles(&self) -> Option<Vec<Complex64>> {
         let (a, _) = self.closed_loop_matrices();
-        let mut p: Vec<Complex64> = a.complex_eigenvalues().iter().copied().collect();
+        if !a.iter().all(|x| x.is_finite()) {
+            return None;
+        }
+        let schur = nalgebra::Schur::try_new(a, f64::EPSILON, POLE_ITERATION_LIMIT)?;
+        let mut p: Vec<Complex64> = schur.complex_eigenvalues().iter().copied().collect();
+        if !p.iter().all(|q| q.re.is_finite() && q.im.is_finite()) {
+            return None;
+        }
         p.sort_by(|x, y| x.norm().total_cmp(&y.norm()).then(x.im.total_cmp(&y.im)));
-        p
+        Some(p)
     }
 
     /// Sample `tf` on a grid.
@@ -217,6 +227,11 @@ impl Linearisation {
 /// is about 1e-12 of the matrix norm, and a growth this slow (1e-9 of the frequency)
 /// would take longer than any test to show.
 pub const UNSTABLE_REAL_PART: f64 = 1e-9;
+
+/// Most QR sweeps of the pole computation: the Francis iteration takes a few sweeps per
+/// eigenvalue, and the closed loop has at most about 15 states, so a thousand is two
+/// orders of magnitude of margin and still returns in well under a millisecond.
+const POLE_ITERATION_LIMIT: usize = 1000;
 
 /// A closed-loop pole in the figures a user reads.
 #[derive(Debug, Clone, Copy, PartialEq, serde::Serialize)]
@@ -244,29 +259,43 @@ impl Pole {
 }
 
 impl Linearisation {
-    /// The closed-loop poles with `Im >= 0` (one of each conjugate pair), as [`Pole`]s.
-    pub fn upper_poles(&self) -> Vec<Pole> {
-        self.poles()
-            .into_iter()
-            .filter(|q| q.im >= 0.0)
-            .map(Pole::of)
-            .collect()
+    /// The closed-loop poles with `Im >= 0` (one of each conjugate pair), as [`Pole`]s;
+    /// `None` as for [`Linearisation::poles`].
+    pub fn upper_poles(&self) -> Option<Vec<Pole>> {
+        let poles = self.poles()?;
+        Some(
+            poles
+                .into_iter()
+                .filter(|q| q.im >= 0.0)
+                .map(Pole::of)
+                .collect(),
+        )
     }
 
     /// The poles of [`Linearisation::upper_poles`] with a positive real part (spec
-    /// section 8): the loop at rest is unstable.
-    pub fn unstable_poles(&self) -> Vec<Pole> {
-        self.upper_poles()
-            .into_iter()
-            .filter(|q| q.re > UNSTABLE_REAL_PART * q.re.hypot(q.im).max(1.0))
-            .collect()
+    /// section 8): the loop at rest is unstable. `None` as for [`Linearisation::poles`].
+    pub fn unstable_poles(&self) -> Option<Vec<Pole>> {
+        let poles = self.upper_poles()?;
+        Some(
+            poles
+                .into_iter()
+                .filter(|q| q.re > UNSTABLE_REAL_PART * q.re.hypot(q.im).max(1.0))
+                .collect(),
+        )
     }
 }
 
 /// The warning every command that computes or simulates with `p` prints (spec section
 /// 8): `None` when the closed loop at rest is stable.
 pub fn stability_warning(p: &Params) -> Option<String> {
-    let unstable = Linearisation::new(p).unstable_poles();
+    let Some(unstable) = Linearisation::new(p).unstable_poles() else {
+        return Some(
+            "the closed-loop poles could not be computed from these parameters (a \
+             non-finite value, or an eigenvalue iteration that did not converge), so \
+             whether the loop at rest is stable is unknown"
+                .to_string(),
+        );
+    };
     let worst = unstable.iter().max_by(|a, b| a.re.total_cmp(&b.re))?;
     Some(format!(
         "the closed loop is unstable at rest: {} pole(s) with a positive real part, \

@@ -54,8 +54,11 @@ pub fn flatness(p: &Params, band_hz: (f64, f64)) -> (f64, f64) {
             f64::INFINITY
         };
     }
-    let damping = lin
-        .upper_poles()
+    // poles that cannot be computed are no margin at all
+    let Some(poles) = lin.upper_poles() else {
+        return ((sum / TUNE_POINTS as f64).sqrt(), f64::NEG_INFINITY);
+    };
+    let damping = poles
         .iter()
         // the zero pole of the linearised Bouc-Wen state (see `frf`) has no damping to keep
         .filter(|q| q.frequency_hz > ZERO_POLE_HZ)

@@ -71,7 +71,9 @@ pub fn run(args: Args) -> anyhow::Result<()> {
         .table_tf_figures()
         .context("the table TF has no peak between 0.5 and 50 Hz with +-1 Hz around it")?;
     let oil = OilColumn::of(&p);
-    let poles = lin.upper_poles();
+    let poles = lin.upper_poles().context(
+        "the closed-loop poles could not be computed (the eigenvalue iteration did not converge)",
+    )?;
     let source = args
         .params
         .as_ref()

@@ -174,8 +174,14 @@ pub unsafe extern "C" fn fmi2ExitInitializationMode(c: fmi2Component) -> fmi2Sta
             let r = comp.instance.exit_initialization_mode();
             let status = comp.result(r);
             // spec section 8: an unstable closed loop is named before the first step
-            match crate::linear::stability_warning(&comp.instance.params) {
-                Some(w) if status == OK => {
+            // only parameters that passed validation are linearised: the poles of
+            // refused (non-finite, absurd) ones mean nothing
+            let warning = match status == OK {
+                true => crate::linear::stability_warning(&comp.instance.params),
+                false => None,
+            };
+            match warning {
+                Some(w) => {
                     let message = format!("fmi2ExitInitializationMode: {w}");
                     comp.log(WARNING, "logStatusWarning", &message);
                     WARNING

@@ -195,8 +195,14 @@ pub unsafe extern "C" fn fmi3ExitInitializationMode(instance: fmi3Instance) -> f
         with(instance, |comp| {
             let r = comp.instance.exit_initialization_mode();
             let status = comp.result(r);
-            match crate::linear::stability_warning(&comp.instance.params) {
-                Some(w) if status == OK => {
+            // only parameters that passed validation are linearised: the poles of
+            // refused (non-finite, absurd) ones mean nothing
+            let warning = match status == OK {
+                true => crate::linear::stability_warning(&comp.instance.params),
+                false => None,
+            };
+            match warning {
+                Some(w) => {
                     comp.log(
                         WARNING,
                         "logStatusWarning",
