@@ -4,18 +4,20 @@
 set -euo pipefail
 ROOT="$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)"
 cd "$ROOT"
+# each phase prints the seconds since the start, so a slow CI run shows where it went
+phase() { echo "== $1 (at ${SECONDS} s)"; }
 source scripts/setup.sh
 
-echo "== cargo build (release)"
+phase "cargo build (release)"
 cargo build --release --all-targets --locked
 if [ -x scripts/build_fmu.sh ]; then
-  echo "== FMU"
+  phase "FMU"
   scripts/build_fmu.sh
 fi
-echo "== cargo test (release)"
+phase "cargo test (release)"
 cargo test --release --locked -- --test-threads=2
 if compgen -G "tests/python/test_*.py" >/dev/null; then
-  echo "== pytest"
+  phase "pytest"
   "$ROOT/.venv/bin/python" -m pytest -q tests/python
 fi
-echo "== all tests passed"
+phase "all tests passed"

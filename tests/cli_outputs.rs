@@ -329,13 +329,14 @@ fn campaign_name_is_escaped_in_the_report() {
     let text = text.replacen(first, &format!("name = \"{evil}\""), 1);
     assert!(text.contains(evil));
     fs::write(&toml, text).unwrap();
-    for cmd in ["identify", "diagnose"] {
-        let r = t.path().join(cmd);
-        let o = shaketable(&[cmd, s(&c), "--report", s(&r)]);
+    // the quick diagnosis writes the same report (and keeps CI inside its time)
+    for cmd in [&["identify"][..], &["diagnose", "--quick"][..]] {
+        let r = t.path().join(cmd[0]);
+        let o = shaketable(&[cmd, &[s(&c), "--report", s(&r)]].concat());
         assert!(o.status.success(), "{}", stderr(&o));
         let html = fs::read_to_string(r.join("index.html")).unwrap();
-        assert!(!html.contains(evil), "live markup in the {cmd} report");
-        assert!(html.contains("&lt;img src=x onerror=alert(1)&gt;"), "{cmd}");
+        assert!(!html.contains(evil), "live markup in the {cmd:?} report");
+        assert!(html.contains("&lt;img src=x onerror=alert(1)&gt;"), "{cmd:?}");
     }
 }
 

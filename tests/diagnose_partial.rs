@@ -85,11 +85,13 @@ const REFERENCE: [&str; 3] = [
     "ref_acceleration_m_s2",
 ];
 
-/// `shaketable diagnose` on `dir` as a user runs it; its JSON.
+/// `shaketable diagnose --quick` on `dir` as a user runs it in a development loop; its
+/// JSON. The quick effort runs every step of the full diagnosis (the partial channels'
+/// closed-loop baseline included) with fewer fit iterations, and keeps CI inside its time.
 fn diagnose(dir: &Path) -> serde_json::Value {
     let json = dir.join("diagnosis.json");
     let o = Command::new(BIN)
-        .args(["diagnose", "--quiet", dir.to_str().unwrap(), "--json"])
+        .args(["diagnose", "--quiet", "--quick", dir.to_str().unwrap(), "--json"])
         .arg(&json)
         .output()
         .unwrap();
