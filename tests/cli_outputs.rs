@@ -336,7 +336,10 @@ fn campaign_name_is_escaped_in_the_report() {
         assert!(o.status.success(), "{}", stderr(&o));
         let html = fs::read_to_string(r.join("index.html")).unwrap();
         assert!(!html.contains(evil), "live markup in the {cmd:?} report");
-        assert!(html.contains("&lt;img src=x onerror=alert(1)&gt;"), "{cmd:?}");
+        assert!(
+            html.contains("&lt;img src=x onerror=alert(1)&gt;"),
+            "{cmd:?}"
+        );
     }
 }
 

@@ -91,7 +91,13 @@ const REFERENCE: [&str; 3] = [
 fn diagnose(dir: &Path) -> serde_json::Value {
     let json = dir.join("diagnosis.json");
     let o = Command::new(BIN)
-        .args(["diagnose", "--quiet", "--quick", dir.to_str().unwrap(), "--json"])
+        .args([
+            "diagnose",
+            "--quiet",
+            "--quick",
+            dir.to_str().unwrap(),
+            "--json",
+        ])
         .arg(&json)
         .output()
         .unwrap();

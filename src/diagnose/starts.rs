@@ -3,6 +3,7 @@
 
 use super::direction_starts::{flow_ratio_start, friction_ratio_start};
 use super::effect::Effect;
+use super::free_play_start::free_play_start;
 use crate::campaign::{Campaign, TestKind};
 use crate::identify::frf::{Welch, WelchOptions};
 use crate::identify::select::random_roles;
@@ -156,13 +157,14 @@ pub(super) fn starts(
     }
 }
 
-/// The start of `effect` read off the data (the foundation's from the LVDT/accelerometer
-/// discrepancy), fitted by [`fit_candidate`] whatever the screening says.
+/// The start of `effect` read off the data (the foundation's and the free play's from the
+/// LVDT/accelerometer discrepancy), fitted by [`fit_candidate`] whatever the screening says.
 pub(super) fn informed_start(effect: Effect, c: &Campaign, base: &Params) -> Option<Vec<f64>> {
     match effect {
         Effect::Foundation => foundation_start(c, base.table.mass_kg),
         Effect::FrictionAsymmetry => friction_ratio_start(c, base).map(|r| vec![r]),
         Effect::FlowAsymmetry => flow_ratio_start(c).map(|r| vec![r]),
+        Effect::FreePlay => free_play_start(c, base, ROD_MASS_FRACTION * base.table.mass_kg),
         _ => None,
     }
 }
