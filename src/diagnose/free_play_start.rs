@@ -38,10 +38,14 @@ const MIN_REVERSALS: usize = 3;
 /// than mid-stroke (0.02-0.05 mm), while a 0.4-mm gap rises 0.40-0.44 mm against at most
 /// 0.09 mm mid-stroke.
 const NULL_FACTOR: f64 = 2.0;
+/// The least rise read as a gap, m: 0.05 mm, over twice the most a clean table's
+/// reversals rise (0.02 mm), a quarter of the smallest grid start, and below the play a
+/// worn clevis shows (0.2 mm, `free_play`'s default).
+const MIN_GAP_M: f64 = 5e-5;
 
 /// The start `[gap_m, rod_mass_kg]` of the free-play fit read off the signature tests'
-/// reversals, or None when they show no rise above the mid-stroke drift or lack the
-/// displacement and acceleration channels.
+/// reversals, or None when they show no rise above the mid-stroke drift and
+/// [`MIN_GAP_M`] or lack the displacement and acceleration channels.
 pub(super) fn free_play_start(c: &Campaign, base: &Params, rod_mass_kg: f64) -> Option<Vec<f64>> {
     let (mut at_reversals, mut mid_stroke) = (Vec::new(), Vec::new());
     for i in Effect::FreePlay.signature_tests(c, base) {
@@ -68,7 +72,7 @@ pub(super) fn free_play_start(c: &Campaign, base: &Params, rod_mass_kg: f64) -> 
         return None;
     }
     let (gap, drift) = (median(at_reversals), median(mid_stroke));
-    let seen = gap > 0.0 && (drift.is_nan() || gap > NULL_FACTOR * drift);
+    let seen = gap > MIN_GAP_M && (drift.is_nan() || gap > NULL_FACTOR * drift);
     seen.then(|| vec![gap, rod_mass_kg])
 }
 
