@@ -4,7 +4,7 @@
 //! worst cells it is in, and before/after overlays of the worst tests and of the table TF.
 
 use crate::campaign::Campaign;
-use crate::diagnose::{padded, simulate_test, Channel, Diagnosis, Part};
+use crate::diagnose::{padded, simulate_test, CellResponse, Channel, Diagnosis, Part};
 use crate::identify::frf::{Welch, WelchOptions};
 use crate::report::plot::{bode_png, xy_png, BodeCurve, Series};
 use crate::report::{escape_html, markdown_code, safe_file_name};
@@ -22,8 +22,17 @@ fn heat(x: Option<f64>) -> String {
     format!("rgb(255,{g},{g})")
 }
 
-/// Write index.html, README.md and the figures into `dir`.
-pub fn write(dir: &Path, c: &Campaign, d: &Diagnosis) -> Result<(), super::ReportError> {
+/// Write index.html, README.md and the figures into `dir`; `responses` are the worst
+/// unexplained cells' model-error responses
+/// ([`crate::diagnose::unexplained_responses`] with
+/// [`super::diagnose_model_error::MODEL_ERROR_FIGURES`]), computed once by the caller,
+/// which also prints the first one's peak.
+pub fn write(
+    dir: &Path,
+    c: &Campaign,
+    d: &Diagnosis,
+    responses: &[CellResponse],
+) -> Result<(), super::ReportError> {
     super::create_dir(dir)?;
     let j = d.to_json();
     let cause = if d.causes.is_empty() {
@@ -229,7 +238,7 @@ pub fn write(dir: &Path, c: &Campaign, d: &Diagnosis) -> Result<(), super::Repor
     }
     html.push_str("</table>");
     super::diagnose_causes::write_causes(&mut html, &mut md, d);
-    super::diagnose_model_error::write_model_error(dir, c, d, &mut html, &mut md)?;
+    super::diagnose_model_error::write_model_error(dir, responses, &mut html, &mut md)?;
     html.push_str("<h2>Candidates of the first search</h2><table><tr><th>effect</th><th>parameters</th><th>report residual</th><th>selection score</th></tr>");
     md.push_str("\n## Candidates of the first search\n\n| effect | parameters | report residual | selection score |\n|---|---|---|---|\n");
     let _ = write!(

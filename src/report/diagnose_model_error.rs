@@ -4,9 +4,8 @@
 
 use super::plot::{gain_band_png, GainBand};
 use super::{escape_html, safe_file_name, ReportError};
-use crate::campaign::Campaign;
 use crate::diagnose::model_error::BAND_SIGMAS;
-use crate::diagnose::{unexplained_responses, Diagnosis, ModelErrorResponse};
+use crate::diagnose::{CellResponse, ModelErrorResponse};
 use std::fmt::Write;
 use std::path::Path;
 
@@ -26,16 +25,14 @@ const HOW_TO_READ: &str = "Each figure is the gain from the test's reference to 
     nonlinearity (friction, deadband, saturation, free play) or noise. Where the band \
     reaches zero the gain is not distinguishable from none.";
 
-/// The model-error section (nothing when the data is explained): figures in `dir`, text
-/// in `html` and `md`.
+/// The model-error section of the unexplained `cells` (nothing when the data is
+/// explained, so none): figures in `dir`, text in `html` and `md`.
 pub(super) fn write_model_error(
     dir: &Path,
-    c: &Campaign,
-    d: &Diagnosis,
+    cells: &[CellResponse],
     html: &mut String,
     md: &mut String,
 ) -> Result<(), ReportError> {
-    let cells = unexplained_responses(d, c, MODEL_ERROR_FIGURES);
     if cells.is_empty() {
         return Ok(());
     }
@@ -50,7 +47,7 @@ pub(super) fn write_model_error(
         md,
         "\n## Model-error response of the worst unexplained cells\n\n{HOW_TO_READ}\n\n{band}\n\n"
     );
-    for cell in &cells {
+    for cell in cells {
         let title = format!("{}, {}", cell.test, cell.channel);
         match &cell.response {
             Ok(m) => {

@@ -6,6 +6,7 @@ mod device;
 pub mod diagnose;
 mod diagnose_causes;
 mod diagnose_model_error;
+pub use diagnose_model_error::MODEL_ERROR_FIGURES;
 pub mod identify;
 pub mod page;
 pub mod plot;

@@ -138,24 +138,15 @@ fn draw_bode(
         .legend(move |(x, y)| PathElement::new(vec![(x, y), (x + 20, y)], col.stroke_width(2)));
     }
     draw_legend(&mut mag).map_err(err)?;
-    let mut ph = ChartBuilder::on(&bottom)
-        .margin(10)
-        .x_label_area_size(40)
-        .y_label_area_size(70)
-        .build_cartesian_2d((f_lo..f_hi).log_scale(), ph_lo..ph_hi)
-        .map_err(|e| err(e.to_string()))?;
-    ph.configure_mesh()
-        .x_desc("frequency (Hz)")
-        .y_desc("phase (deg)")
-        .draw()
-        .map_err(|e| err(e.to_string()))?;
-    for (i, d) in data.iter().enumerate() {
-        ph.draw_series(LineSeries::new(
-            d.iter().map(|p| (p.0, p.2)),
-            color(i).stroke_width(2),
-        ))
-        .map_err(|e| err(e.to_string()))?;
-    }
+    let phase = data
+        .iter()
+        .enumerate()
+        .map(|(i, d)| (d.iter().map(|p| (p.0, p.2)).collect(), color(i)));
+    let axes = LowerAxes {
+        y_desc: "phase (deg)",
+        y_label_area: 70,
+    };
+    lower_panel(&bottom, &axes, (f_lo, f_hi), (ph_lo, ph_hi), phase).map_err(err)?;
     root.present().map_err(|e| err(e.to_string()))
 }
 
@@ -228,6 +219,42 @@ fn draw_legend<'a, DB: DrawingBackend + 'a, CT: CoordTranslate>(
         .border_style(BLACK)
         .draw()
         .map_err(|e| e.to_string())
+}
+
+/// The lower panel's y axis: its label and the width kept for its numbers (the upper
+/// panel's, so that both share one frequency axis).
+struct LowerAxes {
+    y_desc: &'static str,
+    y_label_area: u32,
+}
+
+/// The lower panel of a two-panel figure (the Bode phase, the gain's coherence): `lines`
+/// against a log frequency axis over `(f_lo, f_hi)`, y over `y_range`.
+fn lower_panel<DB: DrawingBackend>(
+    area: &DrawingArea<DB, plotters::coord::Shift>,
+    axes: &LowerAxes,
+    (f_lo, f_hi): (f64, f64),
+    (y_lo, y_hi): (f64, f64),
+    lines: impl Iterator<Item = (Vec<(f64, f64)>, RGBColor)>,
+) -> Result<(), String> {
+    let mut chart = ChartBuilder::on(area)
+        .margin(10)
+        .x_label_area_size(40)
+        .y_label_area_size(axes.y_label_area)
+        .build_cartesian_2d((f_lo..f_hi).log_scale(), y_lo..y_hi)
+        .map_err(|e| e.to_string())?;
+    chart
+        .configure_mesh()
+        .x_desc("frequency (Hz)")
+        .y_desc(axes.y_desc)
+        .draw()
+        .map_err(|e| e.to_string())?;
+    for (points, col) in lines {
+        chart
+            .draw_series(LineSeries::new(points, col.stroke_width(2)))
+            .map_err(|e| e.to_string())?;
+    }
+    Ok(())
 }
 
 /// An axis label: plain between 0.01 and 10 000, in powers of ten beyond (a gain in
@@ -342,21 +369,16 @@ fn draw_gain_band(
         .label("gain")
         .legend(move |(x, y)| PathElement::new(vec![(x, y), (x + 20, y)], line.stroke_width(2)));
     draw_legend(&mut chart).map_err(err)?;
-    let mut coh = ChartBuilder::on(&bottom)
-        .margin(10)
-        .x_label_area_size(40)
-        .y_label_area_size(80)
-        .build_cartesian_2d((f_lo..f_hi).log_scale(), 0.0..1.0)
-        .map_err(|e| err(e.to_string()))?;
-    coh.configure_mesh()
-        .x_desc("frequency (Hz)")
-        .y_desc("coherence")
-        .draw()
-        .map_err(|e| err(e.to_string()))?;
-    coh.draw_series(LineSeries::new(
-        f.iter().zip(band.coherence).map(|(a, b)| (*a, *b)),
-        color(5).stroke_width(2),
-    ))
-    .map_err(|e| err(e.to_string()))?;
+    let coherence: Vec<(f64, f64)> = f
+        .iter()
+        .zip(band.coherence)
+        .map(|(a, b)| (*a, *b))
+        .collect();
+    let axes = LowerAxes {
+        y_desc: "coherence",
+        y_label_area: 80,
+    };
+    let lines = std::iter::once((coherence, color(5)));
+    lower_panel(&bottom, &axes, (f_lo, f_hi), (0.0, 1.0), lines).map_err(err)?;
     root.present().map_err(|e| err(e.to_string()))
 }

@@ -162,9 +162,15 @@ pub fn run(args: Args) -> anyhow::Result<()> {
     let mut j = d.to_json();
     // issue 17 part 4: where the worst unexplained cell's model-error response peaks
     // (null when explained or when no cell has a response)
-    let peak = unexplained_responses(&d, &campaign, 1)
-        .into_iter()
-        .find_map(|c| c.response.ok()?.peak());
+    // the report draws the worst few: the first one's simulation serves both
+    let cells = match args.report {
+        Some(_) => shaketable::report::MODEL_ERROR_FIGURES,
+        None => 1,
+    };
+    let responses = unexplained_responses(&d, &campaign, cells);
+    let peak = responses
+        .iter()
+        .find_map(|c| c.response.as_ref().ok()?.peak());
     j["model_error_peak"] = serde_json::to_value(&peak)?;
     println!(
         "cause: {}  gain {:.2}  explained {}  parameters {}",
@@ -192,7 +198,11 @@ pub fn run(args: Args) -> anyhow::Result<()> {
     outputs.write(
         &(serde_json::to_string_pretty(&j)? + "\n"),
         &d.extended.to_toml_string(),
-        |dir| Ok(shaketable::report::diagnose::write(dir, &campaign, &d)?),
+        |dir| {
+            Ok(shaketable::report::diagnose::write(
+                dir, &campaign, &d, &responses,
+            )?)
+        },
     )?;
     Ok(())
 }
