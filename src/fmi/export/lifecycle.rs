@@ -170,24 +170,14 @@ pub unsafe extern "C" fn fmi2EnterInitializationMode(c: fmi2Component) -> fmi2St
 #[no_mangle]
 pub unsafe extern "C" fn fmi2ExitInitializationMode(c: fmi2Component) -> fmi2Status {
     unsafe {
-        with(c, |comp| {
-            let r = comp.instance.exit_initialization_mode();
-            let status = comp.result(r);
+        with(c, |comp| match comp.instance.exit_initialization_mode() {
             // spec section 8: an unstable closed loop is named before the first step
-            // only parameters that passed validation are linearised: the poles of
-            // refused (non-finite, absurd) ones mean nothing
-            let warning = match status == OK {
-                true => crate::linear::stability_warning(&comp.instance.params),
-                false => None,
-            };
-            match warning {
-                Some(w) => {
-                    let message = format!("fmi2ExitInitializationMode: {w}");
-                    comp.log(WARNING, "logStatusWarning", &message);
-                    WARNING
-                }
-                _ => status,
+            Ok(Some(w)) => {
+                let message = format!("fmi2ExitInitializationMode: {w}");
+                comp.log(WARNING, "logStatusWarning", &message);
+                WARNING
             }
+            r => comp.result(r.map(|_| ())),
         })
     }
 }

@@ -178,7 +178,10 @@ impl Instance {
         Ok(())
     }
 
-    pub fn exit_initialization_mode(&mut self) -> Result<()> {
+    /// Validates the parameters and starts the simulator; `Some` warning when the closed
+    /// loop at rest is unstable (spec section 8). Only parameters that passed validation
+    /// are linearised: the poles of refused (non-finite, absurd) ones mean nothing.
+    pub fn exit_initialization_mode(&mut self) -> Result<Option<String>> {
         const F: &str = "fmi2ExitInitializationMode";
         self.allowed(F, &[Phase::InitializationMode])?;
         if let Err(e) = self.params.validate() {
@@ -204,7 +207,7 @@ impl Instance {
             Interface::CoSimulation => Phase::StepComplete,
             Interface::ModelExchange => Phase::EventMode,
         };
-        Ok(())
+        Ok(crate::linear::stability_warning(&self.params))
     }
 
     pub fn terminate(&mut self) -> Result<()> {

@@ -193,24 +193,14 @@ pub unsafe extern "C" fn fmi3EnterInitializationMode(
 pub unsafe extern "C" fn fmi3ExitInitializationMode(instance: fmi3Instance) -> fmi3Status {
     unsafe {
         with(instance, |comp| {
-            let r = comp.instance.exit_initialization_mode();
-            let status = comp.result(r);
-            // only parameters that passed validation are linearised: the poles of
-            // refused (non-finite, absurd) ones mean nothing
-            let warning = match status == OK {
-                true => crate::linear::stability_warning(&comp.instance.params),
-                false => None,
-            };
-            match warning {
-                Some(w) => {
-                    comp.log(
-                        WARNING,
-                        "logStatusWarning",
-                        &format!("fmi3ExitInitializationMode: {w}"),
-                    );
+            match comp.instance.exit_initialization_mode() {
+                // spec section 8: an unstable closed loop is named before the first step
+                Ok(Some(w)) => {
+                    let message = format!("fmi3ExitInitializationMode: {w}");
+                    comp.log(WARNING, "logStatusWarning", &message);
                     WARNING
                 }
-                _ => status,
+                r => comp.result(r.map(|_| ())),
             }
         })
     }
