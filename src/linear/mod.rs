@@ -275,13 +275,9 @@ impl Linearisation {
     /// The poles of [`Linearisation::upper_poles`] with a positive real part (spec
     /// section 8): the loop at rest is unstable. `None` as for [`Linearisation::poles`].
     pub fn unstable_poles(&self) -> Option<Vec<Pole>> {
-        let poles = self.upper_poles()?;
-        Some(
-            poles
-                .into_iter()
-                .filter(|q| q.re > UNSTABLE_REAL_PART * q.re.hypot(q.im).max(1.0))
-                .collect(),
-        )
+        let mut poles = self.upper_poles()?;
+        poles.retain(|q| q.re > UNSTABLE_REAL_PART * q.re.hypot(q.im).max(1.0));
+        Some(poles)
     }
 }
 
