@@ -358,11 +358,12 @@ fn finds_flow_asymmetry() {
     check(&Params::trees_lab(), "flow_asymmetry", "ratio", 0.15, 702);
 }
 
-/// Not yet found (issue 17 stays open on it): the gap read off the data starts the fit
-/// within a few percent (seed 703: 1.60 mm for 1.54), but the output-error fit ends at a
-/// small gap (0.22 mm), whose bounces misfit less than the true one's chaotic impacts.
+/// The gap is read off the slow tests' reversals and polished on the predictive score of
+/// the wide-band valve test and the fastest sine (its impacts are chaotic in detail).
+/// Other seeds (issue 17 stays open on them): 11 (0.91 mm) passes; 12 (0.30 mm) names a
+/// stick-slip of static ratio 5.4 first and the play second; 13 (0.87 mm) names the play
+/// (+17 %) and then a friction asymmetry of 0.96 (report gain 1.2).
 #[test]
-#[ignore = "issue 17: the free-play fit leaves the gap read off the data for a small one (chaotic impacts, seed 703)"]
 fn finds_free_play() {
     check(&Params::trees_lab(), "free_play", "gap_m", 0.30, 703);
 }

@@ -278,9 +278,9 @@ pub(super) struct Refined {
 /// Output-error refinement of `p0` on the fitting halves of `tests`: the baseline
 /// parameters of [`REFINED`], [`REFINED_FRICTION`], [`REFINED_SPRING`] and the valve
 /// dynamics within their refinement ranges, and, with `effect`, that effect's parameters
-/// from `theta0` (held for stick-slip, whose chatter the deterministic residual does not
-/// see) within their bounds for the table `table`. The iterations are capped at
-/// `iterations`: a baseline that lacks an effect does not converge and need not.
+/// from `theta0` (held, in `p0`, for an effect [`Effect::fitted_on_score`]) within their
+/// bounds for the table `table`. The iterations are capped at `iterations`: a baseline
+/// that lacks an effect does not converge and need not.
 pub(super) fn refine_output_error(
     c: &Campaign,
     p0: &Params,
@@ -303,7 +303,7 @@ pub(super) fn refine_output_error(
         .map(|&w| refinement_range(p0, w, spool))
         .collect();
     let (e, theta_e) = match effect {
-        Some((e, t)) if e != Effect::StickSlip => (Some(e), t.to_vec()),
+        Some((e, t)) if !e.fitted_on_score() => (Some(e), t.to_vec()),
         _ => (None, Vec::new()),
     };
     let ne = theta_e.len();

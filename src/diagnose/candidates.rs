@@ -8,6 +8,7 @@ use super::baseline::{
 use super::effect::Effect;
 use super::effort::Effort;
 use super::evidence::not_evidence;
+use super::free_play_fit::fit_free_play;
 use super::output::{Candidate, PartRows};
 use super::part::Part;
 use super::residuals::{CellScores, Cells, NoiseFloor, Whitening};
@@ -145,6 +146,30 @@ pub(super) fn fit_candidate(
             hold,
         ));
     }
+    if e == Effect::FreePlay {
+        // without a gap read off the reversals there is no play to fit: its impacts are
+        // chaotic, and a fit from a guess lands wherever the bounces misfit least
+        let Some(start) = informed_start(e, c, &bases[1]) else {
+            trace("no gap read off the reversals: not fitted");
+            return None;
+        };
+        let (score, theta, p) = fit_free_play(c, bases, &sig, noise, &start, (fit_idx, whitening))?;
+        trace(&format!("fitted: score {score:.1}, {theta:?}"));
+        return Some(scored_candidate(
+            e,
+            c,
+            Fitted {
+                theta: &theta,
+                sigma: &[],
+                bounds: &e.bounds(&bases[0]),
+                fit_residual: score.sqrt(),
+                params: p,
+            },
+            heldout_idx,
+            noise,
+            hold,
+        ));
+    }
     let ne = e.parameters().len();
     let free = candidate_free(c, &bases[0]);
     let (elo, ehi) = e.bounds(&bases[0]);
@@ -210,12 +235,12 @@ pub(super) fn fit_candidate(
             all.push(start_on(b, &s));
         }
     }
+    let cost_of = |(t, b): &Start| {
+        residual_vector(&assemble(t, b), c, &sig, whitening)
+            .map(|r| r.iter().map(|x| x * x).sum::<f64>())
+            .unwrap_or(f64::INFINITY)
+    };
     if all.len() > effort.screened_starts() {
-        let cost_of = |(t, b): &Start| {
-            residual_vector(&assemble(t, b), c, &sig, whitening)
-                .map(|r| r.iter().map(|x| x * x).sum::<f64>())
-                .unwrap_or(f64::INFINITY)
-        };
         let mut scored: Vec<(f64, Start)> = all.into_iter().map(|s| (cost_of(&s), s)).collect();
         scored.sort_by(|a, b| a.0.total_cmp(&b.0));
         trace(&format!(

@@ -6,10 +6,21 @@
 //! integrated acceleration, levelled on the contact before the reversal, rises in the
 //! direction of the new motion to about the gap.
 
-use super::effect::Effect;
+use super::effect::tests_of;
 use super::residuals::median;
 use crate::campaign::Campaign;
+use crate::effects::SignatureTests;
 use crate::params::Params;
+
+/// The tests whose reversals the gap is read at: the slowest two sines and two triangles
+/// (S1, S4, T1, T3), whose reference passes through rest slowly enough for the rod to
+/// cross the gap while the table waits (a fast test's inertia keeps them together).
+const READ_AT: SignatureTests = SignatureTests {
+    random: &[],
+    slow_sines: 2,
+    slow_triangles: 2,
+    fast_sines: 0,
+};
 
 /// Seconds before a reversal on which the contact is levelled: the rod pushes the table
 /// steadily there, and the double integration's constants are fitted out.
@@ -43,12 +54,12 @@ const NULL_FACTOR: f64 = 2.0;
 /// worn clevis shows (0.2 mm, `free_play`'s default).
 const MIN_GAP_M: f64 = 5e-5;
 
-/// The start `[gap_m, rod_mass_kg]` of the free-play fit read off the signature tests'
-/// reversals, or None when they show no rise above the mid-stroke drift and
+/// The start `[gap_m, rod_mass_kg]` of the free-play fit read off the reversals of the
+/// [`READ_AT`] tests, or None when they show no rise above the mid-stroke drift and
 /// [`MIN_GAP_M`] or lack the displacement and acceleration channels.
 pub(super) fn free_play_start(c: &Campaign, base: &Params, rod_mass_kg: f64) -> Option<Vec<f64>> {
     let (mut at_reversals, mut mid_stroke) = (Vec::new(), Vec::new());
-    for i in Effect::FreePlay.signature_tests(c, base) {
+    for i in tests_of(c, base, &READ_AT) {
         let r = &c.records[i];
         let (Some(x), Some(a)) = (r.displacement_m.as_deref(), r.acceleration_m_s2.as_deref())
         else {

@@ -36,6 +36,7 @@ mod direction_starts;
 mod effect;
 mod effort;
 mod evidence;
+mod free_play_fit;
 mod free_play_start;
 mod locate;
 mod missed;

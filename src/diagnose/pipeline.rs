@@ -215,8 +215,8 @@ impl Diagnoser<'_> {
             self.effort.polish_iterations(),
         )?;
         let theta = from.effect.read(&r.params);
-        // the stick-slip polish holds the effect: its uncertainty is the fit's own (none
-        // for stick-slip's, whose fit gives none)
+        // the polish holds an effect fitted on the score: its uncertainty is the fit's
+        // own (none: the score's fit gives none)
         let sigma: Vec<f64> = if r.effect_sigma.is_empty() && from.sigma.is_empty() {
             Vec::new()
         } else if r.effect_sigma.is_empty() {

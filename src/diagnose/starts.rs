@@ -49,8 +49,6 @@ mod grid {
     /// Deadbands (fractions of the rated spool) and asymmetry ratios either side of 1.
     pub const DEADBANDS: [f64; 2] = [0.01, 0.03];
     pub const ASYMMETRY_RATIOS: [f64; 2] = [0.7, 1.4];
-    /// Free-play gaps (m): a fraction of a millimetre to a millimetre and a half.
-    pub const GAPS_M: [f64; 3] = [2e-4, 6e-4, 1.5e-3];
 }
 
 /// Apparent mass `F/a` of the mass test (R2 in the paper; else the oil-column test:
@@ -150,10 +148,8 @@ pub(super) fn starts(
         Effect::FrictionAsymmetry | Effect::FlowAsymmetry => {
             grid::ASYMMETRY_RATIOS.iter().map(|&r| vec![r]).collect()
         }
-        Effect::FreePlay => grid::GAPS_M
-            .iter()
-            .map(|&g| vec![g, ROD_MASS_FRACTION * m])
-            .collect(),
+        // fitted from the gap read off the data alone ([`super::free_play_fit`])
+        Effect::FreePlay => Vec::new(),
     }
 }
 

@@ -8,6 +8,7 @@
 
 use super::{parameter, switch, Broken, Effect, SignatureTests};
 use crate::campaign::Measured;
+use crate::identify::select::RandomRole;
 use crate::params::Params;
 use crate::params::Rule::{NonNegative, Positive};
 use serde::{Deserialize, Serialize};
@@ -145,13 +146,16 @@ pub const EFFECT: Effect = Effect {
     ],
     cross_check: Some(rod_lighter_than_table),
     help: "",
-    // the reversals of the slowest triangles and sines, where the rod crosses the gap
-    // (T1, T3, S1, S4)
+    // where the gap shapes the motion reproducibly: the wide-band valve test (R1) and the
+    // fastest sine (S9), whose inertia keeps the rod on the table but for quick crossings.
+    // At the slow tests' reversals (where the gap is read, `diagnose::free_play_start`) the
+    // table waits on its friction and bounces inside the gap, chaotically: there a true
+    // 1.5-mm gap misfits the samples more than no gap (seed 703)
     signature_tests: SignatureTests {
-        random: &[],
-        slow_sines: 2,
-        slow_triangles: 2,
-        fast_sines: 0,
+        random: &[RandomRole::Valve],
+        slow_sines: 0,
+        slow_triangles: 0,
+        fast_sines: 1,
     },
     no_effect: &[("gap_m", 0.0)],
     signature_channels: &[&[Measured::Acceleration, Measured::Displacement]],
