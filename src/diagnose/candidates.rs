@@ -128,32 +128,30 @@ pub(super) fn fit_candidate(
             );
         }
     };
-    if e == Effect::StickSlip {
-        let (cost, theta, p) = fit_stick_slip(c, &bases[0], &sig, noise, fit_idx, whitening)?;
-        trace("fitted");
-        return Some(scored_candidate(
-            e,
-            c,
-            Fitted {
-                theta: &theta,
-                sigma: &[],
-                bounds: &e.bounds(&bases[0]),
-                fit_residual: cost.sqrt(),
-                params: p,
-            },
-            heldout_idx,
-            noise,
-            hold,
-        ));
-    }
-    if e == Effect::FreePlay {
-        // without a gap read off the reversals there is no play to fit: its impacts are
-        // chaotic, and a fit from a guess lands wherever the bounces misfit least
-        let Some(start) = informed_start(e, c, &bases[1]) else {
-            trace("no gap read off the reversals: not fitted");
-            return None;
-        };
-        let (score, theta, p) = fit_free_play(c, bases, &sig, noise, &start, (fit_idx, whitening))?;
+    // the effects fitted on the predictive score ([`Effect::fitted_on_score`])
+    let on_score = match e {
+        Effect::StickSlip => Some(fit_stick_slip(
+            c, &bases[0], &sig, noise, fit_idx, whitening,
+        )?),
+        Effect::FreePlay => {
+            // without a gap read off the reversals there is no play to fit: its impacts
+            // are chaotic, and a fit from a guess lands wherever the bounces misfit least
+            let Some(start) = informed_start(e, c, &bases[1]) else {
+                trace("no gap read off the reversals: not fitted");
+                return None;
+            };
+            Some(fit_free_play(
+                c,
+                bases,
+                &sig,
+                noise,
+                &start,
+                (fit_idx, whitening),
+            )?)
+        }
+        _ => None,
+    };
+    if let Some((score, theta, p)) = on_score {
         trace(&format!("fitted: score {score:.1}, {theta:?}"));
         return Some(scored_candidate(
             e,
