@@ -68,7 +68,8 @@ pub(super) fn fit_free_play(
         .iter()
         .map(|&w| candidate_range(bases, w))
         .collect();
-    // the oil column as stiff as the largest factor on the stiffest base
+    // the point polished: gap, rod mass, then [`POLISHED`] in its order (the oil column
+    // first); the oil column as stiff as the largest factor on the stiffest base
     let stiffest = bases
         .iter()
         .map(|b| b.actuator.bulk_modulus_pa)
