@@ -233,12 +233,12 @@ pub(super) fn fit_candidate(
             all.push(start_on(b, &s));
         }
     }
-    let cost_of = |(t, b): &Start| {
-        residual_vector(&assemble(t, b), c, &sig, whitening)
-            .map(|r| r.iter().map(|x| x * x).sum::<f64>())
-            .unwrap_or(f64::INFINITY)
-    };
     if all.len() > effort.screened_starts() {
+        let cost_of = |(t, b): &Start| {
+            residual_vector(&assemble(t, b), c, &sig, whitening)
+                .map(|r| r.iter().map(|x| x * x).sum::<f64>())
+                .unwrap_or(f64::INFINITY)
+        };
         let mut scored: Vec<(f64, Start)> = all.into_iter().map(|s| (cost_of(&s), s)).collect();
         scored.sort_by(|a, b| a.0.total_cmp(&b.0));
         trace(&format!(

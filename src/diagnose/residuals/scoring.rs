@@ -293,7 +293,7 @@ fn measured_beyond_envelope(p: &Params, r: &Record, range: std::ops::Range<usize
 }
 
 /// Sum over `tests` and channels of the squared predictive scores over `part`: the
-/// objective of the fits that cannot use sample-wise least squares (stick-slip).
+/// objective of the fits that cannot use sample-wise least squares (stick-slip, free play).
 pub fn score_sum(p: &Params, c: &Campaign, tests: &[usize], noise: &NoiseFloor, part: Part) -> f64 {
     use rayon::prelude::*;
     if p.validate().is_err() {
