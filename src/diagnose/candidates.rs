@@ -203,10 +203,10 @@ pub(super) fn fit_candidate(
         for which in BaselineParameter::VALVE {
             which.set(&mut fixed, which.get(&bases[1]));
         }
-        if e == Effect::Specimen {
-            // the identified mass holds the specimen's mass at low frequency
+        if let Some(n) = e.specimen_modes() {
+            // the identified mass holds the specimen's (newest mode's) mass at low frequency
             let m = fixed.table.mass_kg;
-            fixed.table.mass_kg = (m - s[0]).max(MIN_TABLE_MASS_SHARE * m);
+            fixed.table.mass_kg = (m - s[3 * (n - 1)]).max(MIN_TABLE_MASS_SHARE * m);
         }
         if e == Effect::Foundation {
             // the identified oil column is the oil and the foundation springs in

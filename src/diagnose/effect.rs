@@ -20,11 +20,17 @@ pub enum Effect {
     FrictionAsymmetry,
     FlowAsymmetry,
     FreePlay,
+    /// The specimen with a second mode, fitted on a one-mode specimen candidate; named
+    /// `specimen` in the JSON, which lists its modes in `modes`.
+    #[serde(rename = "specimen")]
+    SpecimenTwoModes,
+    /// With a third mode, fitted on a two-mode one.
+    #[serde(rename = "specimen")]
+    SpecimenThreeModes,
 }
 
-/// The effects the diagnosis fits: the whole catalogue, in its order. The `specimen`'s
-/// modes 2 and 3 (its `unfitted` parameters) are not fitted yet: a second mode shows as
-/// an unexplained cell near its frequency.
+/// The effects the first search fits: the whole catalogue, in its order. A specimen
+/// candidate is then fitted with one mode more while each helps ([`Effect::next_mode`]).
 pub const EFFECTS: [Effect; 8] = [
     Effect::Specimen,
     Effect::Foundation,
@@ -40,8 +46,33 @@ impl Effect {
     /// The catalogue entry of this effect ([`crate::effects::CATALOGUE`], the one place
     /// its parameters, FMU variables, fitting ranges and signature tests are declared).
     pub fn catalogue(self) -> &'static crate::effects::Effect {
-        // the diagnosis fits the catalogue's effects, in its order
-        &crate::effects::CATALOGUE[self as usize]
+        use crate::effects::specimen::{THREE_MODES, TWO_MODES};
+        match self {
+            Effect::SpecimenTwoModes => &TWO_MODES,
+            Effect::SpecimenThreeModes => &THREE_MODES,
+            // the catalogue's effects come first, in its order
+            _ => &crate::effects::CATALOGUE[self as usize],
+        }
+    }
+
+    /// The specimen with one mode more (a building model's modes show one by one, each
+    /// behind the one before), `None` for the other effects and at three modes.
+    pub(super) fn next_mode(self) -> Option<Effect> {
+        match self {
+            Effect::Specimen => Some(Effect::SpecimenTwoModes),
+            Effect::SpecimenTwoModes => Some(Effect::SpecimenThreeModes),
+            _ => None,
+        }
+    }
+
+    /// The specimen's modes (1 to 3), `None` for the other effects.
+    pub fn specimen_modes(self) -> Option<usize> {
+        match self {
+            Effect::Specimen => Some(1),
+            Effect::SpecimenTwoModes => Some(2),
+            Effect::SpecimenThreeModes => Some(3),
+            _ => None,
+        }
     }
 
     pub fn name(self) -> &'static str {
@@ -164,7 +195,10 @@ mod tests {
     /// catalogue's).
     #[test]
     fn every_effect_is_its_catalogue_entry() {
-        for e in EFFECTS {
+        for e in EFFECTS
+            .into_iter()
+            .chain([Effect::SpecimenTwoModes, Effect::SpecimenThreeModes])
+        {
             // the variant's own name (its JSON form) is its catalogue entry's
             let variant = serde_json::to_string(&e).unwrap();
             assert_eq!(variant, format!("\"{}\"", e.catalogue().name));
@@ -191,7 +225,9 @@ mod tests {
         }
         let paper = |e: Effect| -> &[&str] {
             match e {
-                Effect::Specimen => &["R2", "R3"],
+                Effect::Specimen | Effect::SpecimenTwoModes | Effect::SpecimenThreeModes => {
+                    &["R2", "R3"]
+                }
                 Effect::Foundation => &["R1", "R3", "S9"],
                 Effect::StickSlip => &["S1", "S2", "S4", "S5", "S7", "S8", "T1", "T3"],
                 Effect::FlowSaturation | Effect::FlowAsymmetry => &["R2", "S6", "S9"],

@@ -45,6 +45,7 @@ mod output;
 mod part;
 mod pipeline;
 pub mod residuals;
+mod specimen_modes;
 mod starts;
 mod stick_slip;
 pub mod stribeck;

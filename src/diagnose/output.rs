@@ -4,6 +4,7 @@ use super::effect::Effect;
 use super::effort::Effort;
 use super::evidence::EVIDENCE_SIGMAS;
 use super::residuals::{Cells, NoiseFloor, SCORE_WINDOW};
+use super::specimen_modes::parameters_json;
 use super::{EXPLAINED_RATIO, MISS_RATIO, REQUIRED_GAIN};
 use crate::identify::Identification;
 use crate::params::{ActuatorModel, Params, ServovalveModel};
@@ -198,8 +199,10 @@ impl Diagnosis {
     pub fn to_json(&self) -> serde_json::Value {
         use serde_json::json;
         let cause = self.cause().map(|e| e.name()).unwrap_or("none");
+        // a specimen of several modes as the parameter file writes it (`modes`)
+        let keyed = |e: Effect, p: &BTreeMap<String, f64>| parameters_json(e, p);
         let parameters = match self.causes.first() {
-            Some(c) => json!(c.parameters),
+            Some(c) => keyed(c.effect, &c.parameters),
             None => json!({}),
         };
         // the finite cells: a diverged run's are left out like absent channels
@@ -230,13 +233,13 @@ impl Diagnosis {
             "parameters": parameters,
             "causes": self.causes.iter().map(|c| json!({
                 "effect": c.effect.name(),
-                "parameters": c.parameters,
+                "parameters": keyed(c.effect, &c.parameters),
                 "sigma": c.sigma,
                 "gain": c.gain,
             })).collect::<Vec<_>>(),
             "partial": self.partial.iter().map(|c| json!({
                 "effect": c.effect.name(),
-                "parameters": c.parameters,
+                "parameters": keyed(c.effect, &c.parameters),
                 "selection_gain": c.selection_gain,
                 "why_not_a_cause": c.why_not_a_cause,
             })).collect::<Vec<_>>(),
@@ -252,7 +255,7 @@ impl Diagnosis {
             "baseline_selection_residuals": per_test(&self.baseline_select.residual),
             "candidates": self.candidates.iter().map(|c| json!({
                 "effect": c.effect.name(),
-                "parameters": c.parameters,
+                "parameters": keyed(c.effect, &c.parameters),
                 "sigma": c.sigma,
                 "selection_residual": c.select_residual,
                 "heldout_residual": c.report_residual,

@@ -33,6 +33,9 @@ mod grid {
     /// A specimen's or foundation's starting damping ratios: typical of steel or RC
     /// models (3 %) and of a foundation block on soil (5 %).
     pub const SPECIMEN_DAMPING: f64 = 0.03;
+    /// A further mode's start keeps this factor away from the modes fitted so far: their
+    /// fit's error peaks within a few half-power widths of them (10 % at 3 % damping).
+    pub const MODE_SEPARATION: f64 = 1.1;
     pub const FOUNDATION_DAMPING: f64 = 0.05;
     /// Foundation masses (table masses) at the data's frequency, and the blind grid of
     /// frequencies (Hz) and masses over the plausible band.
@@ -150,7 +153,56 @@ pub(super) fn starts(
         }
         // fitted from the gap read off the data alone ([`super::free_play_fit`])
         Effect::FreePlay => Vec::new(),
+        Effect::SpecimenTwoModes | Effect::SpecimenThreeModes => higher_mode_starts(c, base),
     }
+}
+
+/// Starts of a specimen with one mode more than `base`'s: its modes as they are, then the
+/// new one at the frequency where the measured apparent mass departs most from `base`'s (its
+/// table and modes) relative to it, away from the modes already fitted (whose peaks a
+/// fit a few percent off misses by far more than a weaker mode's, in absolute terms),
+/// with the mass whose resonance peak has the departure's height (`2 zeta` times it) and
+/// the mode-1 spread of masses; none without a random test to read.
+fn higher_mode_starts(c: &Campaign, base: &Params) -> Vec<Vec<f64>> {
+    let Some((f, h)) = apparent_mass(c) else {
+        return Vec::new();
+    };
+    let s = &base.specimen;
+    let modes = s.modes();
+    let modelled = |f_hz: f64| {
+        std::iter::once(s.oscillator())
+            .chain(s.higher_oscillators())
+            .map(|o| o.apparent_mass(f_hz))
+            .sum::<Complex64>()
+            + base.table.mass_kg
+    };
+    let away = |f_hz: f64| {
+        modes
+            .iter()
+            .all(|m| (f_hz / m.frequency_hz).ln().abs() > grid::MODE_SEPARATION.ln())
+    };
+    let departure = |k: usize| {
+        let m = modelled(f[k]);
+        ((h[k] - m).norm(), (h[k] - m).norm() / m.norm())
+    };
+    let Some(k) = (0..f.len())
+        .filter(|&k| away(f[k]))
+        .max_by(|&a, &b| departure(a).1.total_cmp(&departure(b).1))
+    else {
+        return Vec::new();
+    };
+    let z = grid::SPECIMEN_DAMPING;
+    let fitted = modes
+        .iter()
+        .flat_map(|m| [m.mass_kg, m.frequency_hz, m.damping_ratio]);
+    std::iter::once(2.0 * z * departure(k).0)
+        .chain(
+            grid::SPECIMEN_MASS_RATIOS
+                .iter()
+                .map(|r| r * base.table.mass_kg),
+        )
+        .map(|m| fitted.clone().chain([m, f[k], z]).collect())
+        .collect()
 }
 
 /// The start of `effect` read off the data (the foundation's and the free play's from the
@@ -235,4 +287,45 @@ pub(super) fn foundation_start(c: &Campaign, table_mass_kg: f64) -> Option<Vec<f
     };
     let f_f = f_peak * (1.0 + ratio).sqrt();
     Some(vec![table_mass_kg / ratio, f_f, zeta])
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::campaign::synth::{synthesise, SynthOptions};
+
+    /// On a two-mode specimen with mode 1 known (a few percent off, as a one-mode fit
+    /// leaves it), the second mode's start is read at its frequency (within the apparent
+    /// mass's 0.25-Hz lines and the peak's shift by mode 1), on three noise seeds, and
+    /// every start keeps mode 1 as it was.
+    #[test]
+    fn a_second_mode_starts_where_the_apparent_mass_still_departs() {
+        for (seed, f2) in [(1, 13.5), (2, 9.0), (3, 22.0)] {
+            let mut p = Params::trees_lab();
+            p.apply_effect_spec(&format!(
+                "specimen:mass_kg=15000,frequency_hz=4.2,damping_ratio=0.03,\
+                 mode2.mass_kg=5000,mode2.frequency_hz={f2},mode2.damping_ratio=0.02"
+            ))
+            .unwrap();
+            let opts = SynthOptions {
+                tests: Some(vec!["R2".to_string()]),
+                random_duration_s: 30.0,
+                seed,
+                ..Default::default()
+            };
+            let c = synthesise(&p, &opts, None);
+            let mut base = Params::trees_lab();
+            base.apply_effect_spec("specimen:mass_kg=16500,frequency_hz=4.3,damping_ratio=0.025")
+                .unwrap();
+            let s = higher_mode_starts(&c, &base);
+            assert!(!s.is_empty(), "seed {seed}: no start");
+            for start in &s {
+                assert_eq!(start[..3], [16500.0, 4.3, 0.025]);
+                assert!(
+                    (start[4] / f2 - 1.0).abs() < 0.05,
+                    "seed {seed}: {start:?} for {f2} Hz"
+                );
+            }
+        }
+    }
 }

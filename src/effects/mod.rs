@@ -82,8 +82,9 @@ pub struct Effect {
     pub switch: Switch,
     pub parameters: &'static [Parameter],
     /// Parameters declared like [`Effect::parameters`] (parameter file, validation, FMU,
-    /// `--effect`) that the diagnosis does not fit (yet: issue 17 is in progress): the
-    /// `specimen`'s modes 2 and 3.
+    /// `--effect`) that the diagnosis does not fit with the effect itself: the free play's
+    /// contact stiffness, and the `specimen`'s modes 2 and 3 (each fitted as a further
+    /// cause once the mode before it is one: [`specimen::TWO_MODES`]).
     pub unfitted: &'static [Parameter],
     /// A rule across parameters, checked while the effect is enabled after each
     /// parameter's own rule (the `free_play` rod lighter than the table, say).

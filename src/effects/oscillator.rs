@@ -23,6 +23,18 @@ impl Oscillator {
         }
     }
 
+    /// The force its base feels per unit base acceleration at `frequency_hz` (its apparent
+    /// mass): `m (k + i c w) / (k - m w^2 + i c w)`, the mass itself at low frequency,
+    /// peaking near resonance; zero when disabled.
+    pub fn apparent_mass(&self, frequency_hz: f64) -> num_complex::Complex64 {
+        if !self.enabled {
+            return num_complex::Complex64::new(0.0, 0.0);
+        }
+        let w = 2.0 * PI * frequency_hz;
+        let spring = num_complex::Complex64::new(self.stiffness_n_m, self.damping_n_s_m * w);
+        self.mass_kg * spring / (spring - self.mass_kg * w * w)
+    }
+
     /// Spring-damper force on the oscillator's mass at `(x, v)` relative to its base.
     #[inline]
     pub fn restoring_force(&self, x_rel: f64, v_rel: f64) -> f64 {

@@ -13,7 +13,7 @@
 //! named `modeN`.
 
 use super::oscillator::Oscillator;
-use super::{parameter, switch, Broken, Effect, RandomRole, SignatureTests};
+use super::{parameter, switch, Broken, Effect, Parameter, RandomRole, SignatureTests};
 use crate::campaign::Measured;
 use crate::params::Params;
 use crate::params::Rule::{NonNegative, Positive};
@@ -218,37 +218,58 @@ fn mode3_needs_mode2(p: &Params) -> Option<Broken> {
     })
 }
 
+/// Mode 1's parameters: the specimen's own.
+const MODE1_PARAMETERS: [Parameter; 3] = [
+    parameter!(specimen.mass_kg, fmu: "specimen.mass", vr: 141, unit: Some("kg"),
+            rule: Positive, fit: (200.0, 2e5), "Specimen mass"),
+    parameter!(specimen.frequency_hz, fmu: "specimen.frequency", vr: 142, unit: Some("Hz"),
+            rule: Positive, fit: (0.5, 60.0), "Specimen natural frequency"),
+    parameter!(specimen.damping_ratio, fmu: "specimen.damping_ratio", vr: 143, unit: None,
+            rule: NonNegative, fit: (0.002, 0.5), "Specimen damping ratio"),
+];
+
+/// Mode 2's parameters (mode 1's fitting ranges: a higher mode of a building model is a
+/// mode like the first).
+const MODE2_PARAMETERS: [Parameter; 3] = [
+    parameter!(specimen.mode2.mass_kg, fmu: "specimen.mode2.mass", vr: 144,
+        unit: Some("kg"), rule: NonNegative, fit: (200.0, 2e5),
+        "Specimen mode 2 effective mass (0: no mode 2)"),
+    parameter!(specimen.mode2.frequency_hz, fmu: "specimen.mode2.frequency", vr: 145,
+        unit: Some("Hz"), rule: Positive, fit: (0.5, 60.0),
+        "Specimen mode 2 natural frequency"),
+    parameter!(specimen.mode2.damping_ratio, fmu: "specimen.mode2.damping_ratio", vr: 146,
+        unit: None, rule: NonNegative, fit: (0.002, 0.5), "Specimen mode 2 damping ratio"),
+];
+
+/// Mode 3's parameters (as mode 2's).
+const MODE3_PARAMETERS: [Parameter; 3] = [
+    parameter!(specimen.mode3.mass_kg, fmu: "specimen.mode3.mass", vr: 147,
+        unit: Some("kg"), rule: NonNegative, fit: (200.0, 2e5),
+        "Specimen mode 3 effective mass (0: no mode 3; needs mode 2)"),
+    parameter!(specimen.mode3.frequency_hz, fmu: "specimen.mode3.frequency", vr: 148,
+        unit: Some("Hz"), rule: Positive, fit: (0.5, 60.0),
+        "Specimen mode 3 natural frequency"),
+    parameter!(specimen.mode3.damping_ratio, fmu: "specimen.mode3.damping_ratio", vr: 149,
+        unit: None, rule: NonNegative, fit: (0.002, 0.5), "Specimen mode 3 damping ratio"),
+];
+
+/// Modes 2 and 3 in the order the FMU variables and the parameter file list them.
+const HIGHER_MODES: [Parameter; 6] = [
+    MODE2_PARAMETERS[0],
+    MODE2_PARAMETERS[1],
+    MODE2_PARAMETERS[2],
+    MODE3_PARAMETERS[0],
+    MODE3_PARAMETERS[1],
+    MODE3_PARAMETERS[2],
+];
+
 pub const EFFECT: Effect = Effect {
     name: "specimen",
     switch: switch!(specimen, fmu: "specimen.enabled", vr: 140,
         "Flexible SDOF specimen on the table"),
-    parameters: &[
-        parameter!(specimen.mass_kg, fmu: "specimen.mass", vr: 141, unit: Some("kg"),
-            rule: Positive, fit: (200.0, 2e5), "Specimen mass"),
-        parameter!(specimen.frequency_hz, fmu: "specimen.frequency", vr: 142, unit: Some("Hz"),
-            rule: Positive, fit: (0.5, 60.0), "Specimen natural frequency"),
-        parameter!(specimen.damping_ratio, fmu: "specimen.damping_ratio", vr: 143, unit: None,
-            rule: NonNegative, fit: (0.002, 0.5), "Specimen damping ratio"),
-    ],
-    // the fitting ranges are mode 1's, unused until the diagnosis fits several modes
-    unfitted: &[
-        parameter!(specimen.mode2.mass_kg, fmu: "specimen.mode2.mass", vr: 144,
-            unit: Some("kg"), rule: NonNegative, fit: (200.0, 2e5),
-            "Specimen mode 2 effective mass (0: no mode 2)"),
-        parameter!(specimen.mode2.frequency_hz, fmu: "specimen.mode2.frequency", vr: 145,
-            unit: Some("Hz"), rule: Positive, fit: (0.5, 60.0),
-            "Specimen mode 2 natural frequency"),
-        parameter!(specimen.mode2.damping_ratio, fmu: "specimen.mode2.damping_ratio", vr: 146,
-            unit: None, rule: NonNegative, fit: (0.002, 0.5), "Specimen mode 2 damping ratio"),
-        parameter!(specimen.mode3.mass_kg, fmu: "specimen.mode3.mass", vr: 147,
-            unit: Some("kg"), rule: NonNegative, fit: (200.0, 2e5),
-            "Specimen mode 3 effective mass (0: no mode 3; needs mode 2)"),
-        parameter!(specimen.mode3.frequency_hz, fmu: "specimen.mode3.frequency", vr: 148,
-            unit: Some("Hz"), rule: Positive, fit: (0.5, 60.0),
-            "Specimen mode 3 natural frequency"),
-        parameter!(specimen.mode3.damping_ratio, fmu: "specimen.mode3.damping_ratio", vr: 149,
-            unit: None, rule: NonNegative, fit: (0.002, 0.5), "Specimen mode 3 damping ratio"),
-    ],
+    parameters: &MODE1_PARAMETERS,
+    // declared like the others; the diagnosis fits each as a further cause ([`MODE2`])
+    unfitted: &HIGHER_MODES,
     cross_check: Some(mode3_needs_mode2),
     help: "modes 2 and 3: mode2.mass_kg=..,mode2.frequency_hz=..,mode2.damping_ratio=.. \
            (mode3 likewise); a mode exists when its mass_kg > 0, mode 3 needs mode 2",
@@ -261,4 +282,40 @@ pub const EFFECT: Effect = Effect {
     },
     no_effect: &[("mass_kg", 0.0)],
     signature_channels: &[&[Measured::Force], &[Measured::Acceleration]],
+};
+
+/// A specimen of two modes as the diagnosis fits it once one mode is a cause (issue 17
+/// part 1): the same switch and signature, modes 1 and 2 fitted together, evidence of the
+/// second mode when its mass is. Not in [`super::CATALOGUE`] (its parameters are the
+/// specimen's, listed there once).
+pub const TWO_MODES: Effect = Effect {
+    parameters: &[
+        MODE1_PARAMETERS[0],
+        MODE1_PARAMETERS[1],
+        MODE1_PARAMETERS[2],
+        MODE2_PARAMETERS[0],
+        MODE2_PARAMETERS[1],
+        MODE2_PARAMETERS[2],
+    ],
+    unfitted: &MODE3_PARAMETERS,
+    no_effect: &[("mode2.mass_kg", 0.0)],
+    ..EFFECT
+};
+
+/// Three modes, once two are a cause (see [`TWO_MODES`]).
+pub const THREE_MODES: Effect = Effect {
+    parameters: &[
+        MODE1_PARAMETERS[0],
+        MODE1_PARAMETERS[1],
+        MODE1_PARAMETERS[2],
+        MODE2_PARAMETERS[0],
+        MODE2_PARAMETERS[1],
+        MODE2_PARAMETERS[2],
+        MODE3_PARAMETERS[0],
+        MODE3_PARAMETERS[1],
+        MODE3_PARAMETERS[2],
+    ],
+    unfitted: &[],
+    no_effect: &[("mode3.mass_kg", 0.0)],
+    ..EFFECT
 };

@@ -169,7 +169,8 @@ impl<'a> Diagnoser<'a> {
             if round == 0 {
                 first_candidates = candidates;
             }
-            searched.retain(|&e| e != best.effect);
+            // a specimen of several modes is the specimen
+            searched.retain(|&e| e.name() != best.effect.name());
             let current_score = missed.rms(&current.select.score);
             match verdict(&best, current_score, table_mass_kg) {
                 Verdict::Cause => {
