@@ -150,7 +150,8 @@ impl Diagnoser<'_> {
     }
 
     /// Every effect of `effects` fitted on the two bases, summarised on the cells
-    /// `missed` of the selection quarter. `step0` is the progress step of the search.
+    /// `missed` of the selection quarter (a specimen with its further modes). `step0` is
+    /// the progress step of the search.
     fn fit_candidates(
         &self,
         effects: &[Effect],
@@ -160,7 +161,7 @@ impl Diagnoser<'_> {
         (step0, total): (usize, usize),
     ) -> Vec<Candidate> {
         let done = std::sync::atomic::AtomicUsize::new(step0);
-        let mut candidates: Vec<Candidate> = effects
+        effects
             .par_iter()
             .filter_map(|&e| {
                 let cand = fit_candidate(
@@ -173,31 +174,31 @@ impl Diagnoser<'_> {
                     self.effort,
                     &self.whitening,
                     hold,
-                );
+                )
+                .map(|mut cand| {
+                    cand.summarise(&|rows| missed.rms(rows), &|rows| {
+                        self.report_missed.rms(rows)
+                    });
+                    match e {
+                        // its further modes beside the other effects' fits
+                        Effect::Specimen => self.with_further_modes(&cand, &bases[1], missed, hold),
+                        _ => cand,
+                    }
+                });
                 let n = done.fetch_add(1, std::sync::atomic::Ordering::Relaxed);
                 self.tick(n + 1, total, &format!("fitted {}", e.name()));
                 cand
             })
-            .collect();
-        for cand in &mut candidates {
-            cand.summarise(&|rows| missed.rms(rows), &|rows| {
-                self.report_missed.rms(rows)
-            });
-        }
-        for cand in &mut candidates {
-            if cand.effect == Effect::Specimen {
-                *cand = self.with_further_modes(cand, &bases[1], missed, hold);
-            }
-        }
-        candidates
+            .collect()
     }
 
     /// A specimen candidate with its further modes (spec section 7, second part): the
     /// specimen with one mode more, fitted with every mode free from the modes so far and
     /// the new one where the measured apparent mass still departs from theirs, replaces
     /// it while it would be a cause on top of it (divides its selection score by
-    /// [`REQUIRED_GAIN`] and is evidence). A second mode can dominate the residual a first
-    /// leaves, so one mode alone may not pass. The modes end in ascending frequency.
+    /// [`REQUIRED_GAIN`], is evidence and keeps its modes apart). A second mode can
+    /// dominate the residual a first leaves, so one mode alone may not pass. The modes end
+    /// in ascending frequency.
     fn with_further_modes(
         &self,
         specimen: &Candidate,
@@ -236,7 +237,11 @@ impl Diagnoser<'_> {
                     next.not_evidence.as_deref().unwrap_or("")
                 );
             }
-            if !(cand.score / next.score >= REQUIRED_GAIN) || next.not_evidence.is_some() {
+            // a mode split in two is one mode: a refit with more freedom, no new mode
+            if !(cand.score / next.score >= REQUIRED_GAIN)
+                || next.not_evidence.is_some()
+                || !specimen_modes::modes_apart(&next.params)
+            {
                 break;
             }
             specimen_modes::sort_modes(&mut next);

@@ -4,6 +4,7 @@
 use super::direction_starts::{flow_ratio_start, friction_ratio_start};
 use super::effect::Effect;
 use super::free_play_start::free_play_start;
+use super::specimen_modes::MODE_SEPARATION;
 use crate::campaign::{Campaign, TestKind};
 use crate::identify::frf::{Welch, WelchOptions};
 use crate::identify::select::random_roles;
@@ -33,9 +34,6 @@ mod grid {
     /// A specimen's or foundation's starting damping ratios: typical of steel or RC
     /// models (3 %) and of a foundation block on soil (5 %).
     pub const SPECIMEN_DAMPING: f64 = 0.03;
-    /// A further mode's start keeps this factor away from the modes fitted so far: their
-    /// fit's error peaks within a few half-power widths of them (10 % at 3 % damping).
-    pub const MODE_SEPARATION: f64 = 1.1;
     pub const FOUNDATION_DAMPING: f64 = 0.05;
     /// Foundation masses (table masses) at the data's frequency, and the blind grid of
     /// frequencies (Hz) and masses over the plausible band.
@@ -158,52 +156,98 @@ pub(super) fn starts(
 }
 
 /// Starts of a specimen with one mode more than `base`'s: its modes as they are, then the
-/// new one at the frequency where the measured apparent mass departs most from `base`'s (its
-/// table and modes) relative to it, away from the modes already fitted (whose peaks a
-/// fit a few percent off misses by far more than a weaker mode's, in absolute terms),
-/// with the mass whose resonance peak has the departure's height (`2 zeta` times it) and
-/// the mode-1 spread of masses; none without a random test to read.
+/// new one at each of [`FURTHER_MODE_FREQUENCIES`] frequencies read off the mass test's
+/// apparent mass away from the modes so far (a fit a few percent off misses its own
+/// mode's peak by far more than a weaker mode's, so nothing is read near one): the
+/// highest peaks of `|F/a - M|` (the measured modes), then where `F/a` departs most from
+/// `base`'s table and modes relative to them. At each, the mass whose resonance peak has
+/// the departure's height (`2 zeta` times it) and the mode-1 spread of masses. First, all
+/// modes afresh at the highest measured peaks. None without a random test to read.
 fn higher_mode_starts(c: &Campaign, base: &Params) -> Vec<Vec<f64>> {
     let Some((f, h)) = apparent_mass(c) else {
         return Vec::new();
     };
     let s = &base.specimen;
     let modes = s.modes();
+    let table = base.table.mass_kg;
     let modelled = |f_hz: f64| {
         std::iter::once(s.oscillator())
             .chain(s.higher_oscillators())
             .map(|o| o.apparent_mass(f_hz))
             .sum::<Complex64>()
-            + base.table.mass_kg
+            + table
     };
-    let away = |f_hz: f64| {
-        modes
-            .iter()
-            .all(|m| (f_hz / m.frequency_hz).ln().abs() > grid::MODE_SEPARATION.ln())
-    };
-    let departure = |k: usize| {
-        let m = modelled(f[k]);
-        ((h[k] - m).norm(), (h[k] - m).norm() / m.norm())
-    };
-    let Some(k) = (0..f.len())
-        .filter(|&k| away(f[k]))
-        .max_by(|&a, &b| departure(a).1.total_cmp(&departure(b).1))
-    else {
-        return Vec::new();
-    };
+    let fitted_hz: Vec<f64> = modes.iter().map(|m| m.frequency_hz).collect();
+    let away = |k: &usize| apart(f[*k], &fitted_hz);
+    let departure = |k: usize| (h[k] - modelled(f[k])).norm();
+    let height: Vec<f64> = h.iter().map(|h| (h - table).norm()).collect();
+    let mut peaks = highest_peaks(&f, &height, &fitted_hz, FURTHER_MODE_FREQUENCIES - 1);
+    let most_departing = (0..f.len()).filter(away).max_by(|&a, &b| {
+        (departure(a) / modelled(f[a]).norm()).total_cmp(&(departure(b) / modelled(f[b]).norm()))
+    });
+    peaks.extend(most_departing.filter(|k| !peaks.contains(k)));
     let z = grid::SPECIMEN_DAMPING;
+    // every mode afresh at the highest measured peaks, in case the modes so far bent to
+    // absorb the next one (a one-mode fit drawn between two peaks)
+    let mut highest = highest_peaks(&f, &height, &[], modes.len() + 1);
+    highest.sort_unstable();
+    let afresh: Vec<f64> = highest
+        .iter()
+        .flat_map(|&k| [2.0 * z * height[k], f[k], z])
+        .collect();
     let fitted = modes
         .iter()
         .flat_map(|m| [m.mass_kg, m.frequency_hz, m.damping_ratio]);
-    std::iter::once(2.0 * z * departure(k).0)
+    (highest.len() == modes.len() + 1)
+        .then_some(afresh)
+        .into_iter()
         .chain(
-            grid::SPECIMEN_MASS_RATIOS
-                .iter()
-                .map(|r| r * base.table.mass_kg),
+            peaks
+                .into_iter()
+                .flat_map(|k| {
+                    let fk = f[k];
+                    std::iter::once(2.0 * z * departure(k))
+                        .chain(grid::SPECIMEN_MASS_RATIOS.iter().map(|r| r * table))
+                        .map(move |m| (m, fk))
+                })
+                .map(|(m, fk)| fitted.clone().chain([m, fk, z]).collect()),
         )
-        .map(|m| fitted.clone().chain([m, f[k], z]).collect())
         .collect()
 }
+
+/// Whether `f_hz` lies at least [`MODE_SEPARATION`] from each of `modes_hz`.
+fn apart(f_hz: f64, modes_hz: &[f64]) -> bool {
+    modes_hz
+        .iter()
+        .all(|m| (f_hz / m).ln().abs() >= MODE_SEPARATION.ln())
+}
+
+/// The indices of the `n` highest local maxima of `height` over `f`, each
+/// [`MODE_SEPARATION`] apart from the others and from `taken_hz` (the lines beside a sharp
+/// peak are no second mode).
+fn highest_peaks(f: &[f64], height: &[f64], taken_hz: &[f64], n: usize) -> Vec<usize> {
+    let mut maxima: Vec<usize> = (1..f.len().saturating_sub(1))
+        .filter(|&k| height[k] > height[k - 1] && height[k] >= height[k + 1])
+        .collect();
+    maxima.sort_by(|&a, &b| height[b].total_cmp(&height[a]));
+    let mut taken = taken_hz.to_vec();
+    let mut picked = Vec::new();
+    for k in maxima {
+        if picked.len() == n {
+            break;
+        }
+        if apart(f[k], &taken) {
+            taken.push(f[k]);
+            picked.push(k);
+        }
+    }
+    picked
+}
+
+/// Frequencies a further specimen mode starts from ([`higher_mode_starts`]): the two
+/// highest measured peaks and the largest departure from the modes so far (a mode 1 fitted
+/// alone can bend so that the departure peaks beside it, not at the next mode).
+const FURTHER_MODE_FREQUENCIES: usize = 3;
 
 /// The start of `effect` read off the data (the foundation's and the free play's from the
 /// LVDT/accelerometer discrepancy), fitted by [`fit_candidate`] whatever the screening says.
@@ -294,17 +338,23 @@ mod tests {
     use super::*;
     use crate::campaign::synth::{synthesise, SynthOptions};
 
-    /// On a two-mode specimen with mode 1 known (a few percent off, as a one-mode fit
-    /// leaves it), the second mode's start is read at its frequency (within the apparent
-    /// mass's 0.25-Hz lines and the peak's shift by mode 1), on three noise seeds, and
-    /// every start keeps mode 1 as it was.
+    /// On a two-mode specimen with mode 1 fitted a few percent off (as a one-mode fit
+    /// leaves it), one of the second mode's starts is read at its frequency (within the
+    /// apparent mass's 0.25-Hz lines and the peak's shift by mode 1), on four draws; the
+    /// first start takes both modes afresh at the measured peaks, the others keep mode 1
+    /// as it was, at no more than three frequencies.
     #[test]
     fn a_second_mode_starts_where_the_apparent_mass_still_departs() {
-        for (seed, f2) in [(1, 13.5), (2, 9.0), (3, 22.0)] {
+        for (seed, f1, fitted_f1, f2) in [
+            (1, 4.2, 4.3, 13.5),
+            (2, 4.2, 4.3, 9.0),
+            (3, 4.2, 4.3, 22.0),
+            (4, 9.8, 9.4, 38.6),
+        ] {
             let mut p = Params::trees_lab();
             p.apply_effect_spec(&format!(
-                "specimen:mass_kg=15000,frequency_hz=4.2,damping_ratio=0.03,\
-                 mode2.mass_kg=5000,mode2.frequency_hz={f2},mode2.damping_ratio=0.02"
+                "specimen:mass_kg=15000,frequency_hz={f1},damping_ratio=0.03,\
+                 mode2.mass_kg=5000,mode2.frequency_hz={f2},mode2.damping_ratio=0.01"
             ))
             .unwrap();
             let opts = SynthOptions {
@@ -315,16 +365,29 @@ mod tests {
             };
             let c = synthesise(&p, &opts, None);
             let mut base = Params::trees_lab();
-            base.apply_effect_spec("specimen:mass_kg=16500,frequency_hz=4.3,damping_ratio=0.025")
-                .unwrap();
+            base.apply_effect_spec(&format!(
+                "specimen:mass_kg=16500,frequency_hz={fitted_f1},damping_ratio=0.025"
+            ))
+            .unwrap();
             let s = higher_mode_starts(&c, &base);
-            assert!(!s.is_empty(), "seed {seed}: no start");
-            for start in &s {
-                assert_eq!(start[..3], [16500.0, 4.3, 0.025]);
+            // the first start takes every mode afresh at the highest measured peaks
+            let afresh = [s[0][1], s[0][4]];
+            for (got, want) in afresh.iter().zip([f1, f2]) {
                 assert!(
-                    (start[4] / f2 - 1.0).abs() < 0.05,
-                    "seed {seed}: {start:?} for {f2} Hz"
+                    (got / want - 1.0).abs() < 0.05,
+                    "seed {seed}: afresh at {afresh:?}"
                 );
+            }
+            // the others keep mode 1 as fitted
+            let mut at: Vec<f64> = s[1..].iter().map(|start| start[4]).collect();
+            at.dedup();
+            assert!(at.len() <= FURTHER_MODE_FREQUENCIES, "seed {seed}: {at:?}");
+            assert!(
+                at.iter().any(|f| (f / f2 - 1.0).abs() < 0.05),
+                "seed {seed}: starts at {at:?} Hz for {f2} Hz"
+            );
+            for start in &s[1..] {
+                assert_eq!(start[..3], [16500.0, fitted_f1, 0.025]);
             }
         }
     }

@@ -285,8 +285,8 @@ pub const EFFECT: Effect = Effect {
 };
 
 /// A specimen of two modes as the diagnosis fits it once one mode is a cause (issue 17
-/// part 1): the same switch and signature, modes 1 and 2 fitted together, evidence of the
-/// second mode when its mass is. Not in [`super::CATALOGUE`] (its parameters are the
+/// part 1): the same switch and signature, modes 1 and 2 fitted together, evidence when
+/// each mode's mass is. Not in [`super::CATALOGUE`] (its parameters are the
 /// specimen's, listed there once).
 pub const TWO_MODES: Effect = Effect {
     parameters: &[
@@ -298,7 +298,8 @@ pub const TWO_MODES: Effect = Effect {
         MODE2_PARAMETERS[2],
     ],
     unfitted: &MODE3_PARAMETERS,
-    no_effect: &[("mode2.mass_kg", 0.0)],
+    // every mode must be evidence of itself
+    no_effect: &[("mass_kg", 0.0), ("mode2.mass_kg", 0.0)],
     ..EFFECT
 };
 
@@ -316,6 +317,10 @@ pub const THREE_MODES: Effect = Effect {
         MODE3_PARAMETERS[2],
     ],
     unfitted: &[],
-    no_effect: &[("mode3.mass_kg", 0.0)],
+    no_effect: &[
+        ("mass_kg", 0.0),
+        ("mode2.mass_kg", 0.0),
+        ("mode3.mass_kg", 0.0),
+    ],
     ..EFFECT
 };
