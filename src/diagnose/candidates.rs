@@ -395,5 +395,6 @@ pub(super) fn scored_candidate(
         params: p,
         select,
         report,
+        fewer_modes: None,
     }
 }

@@ -19,7 +19,9 @@
 //!    informed starts (FRF fits for specimen and foundation, the velocity plateau for flow
 //!    saturation, small grids for the deadband) by output-error least squares; stick-slip
 //!    from the friction-velocity curve of the slow tests ([`stribeck`]), polished on the
-//!    predictive score (its chatter has no reproducible phase).
+//!    predictive score (its chatter has no reproducible phase). A specimen is refitted
+//!    with one mode more, every mode free, while that divides its selection score by
+//!    [`REQUIRED_GAIN`] and each mode is evidence ([`specimen_modes`], up to three).
 //! 5. The best candidate by score on the cells the current model misses in the
 //!    selection quarter is a cause when it divides that model's score by at least
 //!    [`REQUIRED_GAIN`], is physical and is evidence (no parameter at a bound, its

@@ -50,6 +50,10 @@ pub struct Candidate {
     pub select: PartRows,
     #[serde(skip)]
     pub report: PartRows,
+    /// A specimen of several modes: itself with one mode fewer, which the search falls
+    /// back to when polishing leaves no evidence of the last mode.
+    #[serde(skip)]
+    pub fewer_modes: Option<Box<Candidate>>,
 }
 
 impl Candidate {
@@ -67,6 +71,7 @@ impl Candidate {
             params: Params::default(),
             select: PartRows::default(),
             report: PartRows::default(),
+            fewer_modes: None,
         }
     }
 }
@@ -280,7 +285,7 @@ impl Diagnosis {
                 "servovalve": self.extended.servovalve.model.name(),
                 "actuator": self.extended.actuator.model.name(),
             },
-            "rule": format!("every model is simulated noise-free and with seeded sensor noise at the estimated levels inside the loop; residual (measured - noise-free run) and predicted spread (noisy run with its own sensor noise - noise-free run) are split into octave bands (the lowest from 0 Hz, the highest to Nyquist) and scored per band in windows of {SCORE_WINDOW} samples or more (8 degrees of freedom in the band): score = sqrt(mean over bands of mean(P_meas/P_pred + ln(P_pred/floor^2 share))) (Gaussian log score, a proper scoring rule), residual = sqrt(mean over bands of mean(P_meas/P_pred)) (1 for a model that predicts the data to within its noise); missed cells = (test, channel) cells whose residual exceeds {MISS_RATIO}; each search fits every effect not yet accepted on the current model (fit half) and ranks them by RMS score on the cells the current model misses in the selection quarter (1 % penalty per parameter); the best is a cause when it divides the current score there by >= {REQUIRED_GAIN}, is physical and is evidence (no parameter at a bound of its range, its strength parameter more than {EVIDENCE_SIGMAS} sigma from its no-effect value); the search repeats with the causes in the model until no candidate passes or no selection cell is missed; gain = baseline residual / extended residual on the baseline's missed cells of the report quarter; explained when every such cell has an extended residual <= {EXPLAINED_RATIO}"),
+            "rule": format!("every model is simulated noise-free and with seeded sensor noise at the estimated levels inside the loop; residual (measured - noise-free run) and predicted spread (noisy run with its own sensor noise - noise-free run) are split into octave bands (the lowest from 0 Hz, the highest to Nyquist) and scored per band in windows of {SCORE_WINDOW} samples or more (8 degrees of freedom in the band): score = sqrt(mean over bands of mean(P_meas/P_pred + ln(P_pred/floor^2 share))) (Gaussian log score, a proper scoring rule), residual = sqrt(mean over bands of mean(P_meas/P_pred)) (1 for a model that predicts the data to within its noise); missed cells = (test, channel) cells whose residual exceeds {MISS_RATIO}; each search fits every effect not yet accepted on the current model (fit half) and ranks them by RMS score on the cells the current model misses in the selection quarter (1 % penalty per parameter; a specimen is refitted with one mode more, every mode free, up to three, while that divides its score there by >= {REQUIRED_GAIN}, every mode's mass is significant and its modes lie 10 % apart in frequency); the best is a cause when it divides the current score there by >= {REQUIRED_GAIN}, is physical and is evidence (no parameter at a bound of its range, its strength parameter more than {EVIDENCE_SIGMAS} sigma from its no-effect value); the search repeats with the causes in the model until no candidate passes or no selection cell is missed; gain = baseline residual / extended residual on the baseline's missed cells of the report quarter; explained when every such cell has an extended residual <= {EXPLAINED_RATIO}"),
         })
     }
 }

@@ -164,32 +164,42 @@ impl Diagnoser<'_> {
         effects
             .par_iter()
             .filter_map(|&e| {
-                let cand = fit_candidate(
-                    e,
-                    self.c,
-                    &bases,
-                    &self.tests,
-                    &self.tests,
-                    &self.noise,
-                    self.effort,
-                    &self.whitening,
-                    hold,
-                )
-                .map(|mut cand| {
-                    cand.summarise(&|rows| missed.rms(rows), &|rows| {
-                        self.report_missed.rms(rows)
-                    });
-                    match e {
-                        // its further modes beside the other effects' fits
-                        Effect::Specimen => self.with_further_modes(&cand, &bases[1], missed, hold),
-                        _ => cand,
-                    }
+                let cand = self.fitted(e, &bases, missed, hold).map(|cand| match e {
+                    // its further modes beside the other effects' fits
+                    Effect::Specimen => self.with_further_modes(&cand, &bases[1], missed, hold),
+                    _ => cand,
                 });
                 let n = done.fetch_add(1, std::sync::atomic::Ordering::Relaxed);
                 self.tick(n + 1, total, &format!("fitted {}", e.name()));
                 cand
             })
             .collect()
+    }
+
+    /// `e` fitted on `bases` (every test's fitting half), summarised on the cells `missed`
+    /// of the selection quarter.
+    fn fitted(
+        &self,
+        e: Effect,
+        bases: &[Params; 2],
+        missed: &Missed,
+        hold: &Hold,
+    ) -> Option<Candidate> {
+        let mut cand = fit_candidate(
+            e,
+            self.c,
+            bases,
+            &self.tests,
+            &self.tests,
+            &self.noise,
+            self.effort,
+            &self.whitening,
+            hold,
+        )?;
+        cand.summarise(&|rows| missed.rms(rows), &|rows| {
+            self.report_missed.rms(rows)
+        });
+        Some(cand)
     }
 
     /// A specimen candidate with its further modes (spec section 7, second part): the
@@ -211,22 +221,9 @@ impl Diagnoser<'_> {
         while let Some(e) = mode {
             let mut under = *section4;
             under.specimen = cand.params.specimen;
-            let Some(mut next) = fit_candidate(
-                e,
-                self.c,
-                &[cand.params, under],
-                &self.tests,
-                &self.tests,
-                &self.noise,
-                self.effort,
-                &self.whitening,
-                hold,
-            ) else {
+            let Some(mut next) = self.fitted(e, &[cand.params, under], missed, hold) else {
                 break;
             };
-            next.summarise(&|rows| missed.rms(rows), &|rows| {
-                self.report_missed.rms(rows)
-            });
             if trace_enabled() {
                 eprintln!(
                     "  {:?} on the specimen: score {:.3} against {:.3}, {:?}{}",
@@ -245,6 +242,7 @@ impl Diagnoser<'_> {
                 break;
             }
             specimen_modes::sort_modes(&mut next);
+            next.fewer_modes = Some(Box::new(cand));
             cand = next;
             mode = e.next_mode();
         }
@@ -314,6 +312,7 @@ impl Diagnoser<'_> {
         polished.summarise(&|rows| missed.rms(rows), &|rows| {
             self.report_missed.rms(rows)
         });
+        polished.fewer_modes = from.fewer_modes.clone();
         Some(polished)
     }
 
@@ -410,7 +409,16 @@ impl Diagnoser<'_> {
                 candidates[k].effect.name()
             ),
         );
-        candidates[k] = self.polish_best(&candidates[k], &missed, &hold);
+        let mut best = self.polish_best(&candidates[k], &missed, &hold);
+        // a specimen whose last mode the polish leaves no evidence of (moved to a bound):
+        // the specimen with one mode fewer, polished in its place
+        while best.not_evidence.is_some() {
+            let Some(fewer) = best.fewer_modes.take() else {
+                break;
+            };
+            best = self.polish_best(&fewer, &missed, &hold);
+        }
+        candidates[k] = best;
         Some((candidates, k, missed))
     }
 }
