@@ -234,7 +234,8 @@ impl Diagnoser<'_> {
                     next.not_evidence.as_deref().unwrap_or("")
                 );
             }
-            // a mode split in two is one mode: a refit with more freedom, no new mode
+            // a mode split in two is one mode: a refit with more freedom, no new mode (a
+            // NaN score fails the gain too)
             if !(cand.score / next.score >= REQUIRED_GAIN)
                 || next.not_evidence.is_some()
                 || !specimen_modes::modes_apart(&next.params)
