@@ -17,14 +17,17 @@ const PREFIXES: [&str; 3] = ["", "mode2.", "mode3."];
 /// widths of them (10 % at 3 % damping).
 pub(super) const MODE_SEPARATION: f64 = 1.1;
 
+/// Whether `f_hz` lies at least [`MODE_SEPARATION`] from each of `modes_hz`.
+pub(super) fn apart(f_hz: f64, modes_hz: &[f64]) -> bool {
+    modes_hz
+        .iter()
+        .all(|m| (f_hz / m).ln().abs() >= MODE_SEPARATION.ln())
+}
+
 /// Whether the specimen's modes in `p` lie at least [`MODE_SEPARATION`] apart.
 pub(super) fn modes_apart(p: &crate::params::Params) -> bool {
     let f: Vec<f64> = p.specimen.modes().iter().map(|m| m.frequency_hz).collect();
-    f.iter().enumerate().all(|(i, a)| {
-        f[i + 1..]
-            .iter()
-            .all(|b| (a / b).ln().abs() >= MODE_SEPARATION.ln())
-    })
+    (0..f.len()).all(|i| apart(f[i], &f[i + 1..]))
 }
 
 /// The three fields of a mode, in [`SpecimenMode`]'s order.

@@ -4,7 +4,7 @@
 use super::direction_starts::{flow_ratio_start, friction_ratio_start};
 use super::effect::Effect;
 use super::free_play_start::free_play_start;
-use super::specimen_modes::MODE_SEPARATION;
+use super::specimen_modes::apart;
 use crate::campaign::{Campaign, TestKind};
 use crate::identify::frf::{Welch, WelchOptions};
 use crate::identify::select::random_roles;
@@ -215,16 +215,9 @@ fn higher_mode_starts(c: &Campaign, base: &Params) -> Vec<Vec<f64>> {
         .collect()
 }
 
-/// Whether `f_hz` lies at least [`MODE_SEPARATION`] from each of `modes_hz`.
-fn apart(f_hz: f64, modes_hz: &[f64]) -> bool {
-    modes_hz
-        .iter()
-        .all(|m| (f_hz / m).ln().abs() >= MODE_SEPARATION.ln())
-}
-
-/// The indices of the `n` highest local maxima of `height` over `f`, each
-/// [`MODE_SEPARATION`] apart from the others and from `taken_hz` (the lines beside a sharp
-/// peak are no second mode).
+/// The indices of the `n` highest local maxima of `height` over `f`, each [`apart`]
+/// from the others and from `taken_hz` (the lines beside a sharp peak are no second
+/// mode).
 fn highest_peaks(f: &[f64], height: &[f64], taken_hz: &[f64], n: usize) -> Vec<usize> {
     let mut maxima: Vec<usize> = (1..f.len().saturating_sub(1))
         .filter(|&k| height[k] > height[k - 1] && height[k] >= height[k + 1])
