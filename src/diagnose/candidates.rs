@@ -14,7 +14,7 @@ use super::part::Part;
 use super::residuals::{CellScores, Cells, NoiseFloor, Whitening};
 use super::starts::{informed_start, starts};
 use super::stick_slip::fit_stick_slip;
-use super::{residuals, trace_enabled};
+use super::{residuals, specimen_modes, trace_enabled};
 use crate::campaign::Campaign;
 use crate::identify::lsq::minimise;
 use crate::params::Params;
@@ -243,13 +243,22 @@ pub(super) fn fit_candidate(
         scored.sort_by(|a, b| a.0.total_cmp(&b.0));
         trace(&format!(
             "screened starts: {:?}",
-            scored.iter().map(|s| s.0).collect::<Vec<_>>()
+            scored
+                .iter()
+                .map(|s| (s.0, &s.1 .0[..ne]))
+                .collect::<Vec<_>>()
         ));
-        all = scored
-            .into_iter()
-            .take(effort.screened_starts())
-            .map(|x| x.1)
-            .collect();
+        all = match e.specimen_modes().filter(|&n| n > 1) {
+            // a further mode: the best start at each of its frequencies too
+            Some(n) => specimen_modes::keep_each_frequency(scored, effort.screened_starts(), |s| {
+                s.0[3 * (n - 1) + 1]
+            }),
+            None => scored
+                .into_iter()
+                .take(effort.screened_starts())
+                .map(|x| x.1)
+                .collect(),
+        };
     }
     // a start read off the data itself is fitted whatever its screening: a lightly damped
     // foundation mode a few percent off misfits more than none until the baseline has
