@@ -172,7 +172,14 @@ impl<'a> Diagnoser<'a> {
             // a specimen of several modes is the specimen
             searched.retain(|&e| e.name() != best.effect.name());
             let current_score = missed.rms(&current.select.score);
-            match verdict(&best, current_score, table_mass_kg) {
+            let chance = self.chance_factor(&current, &missed);
+            if crate::diagnose::trace_enabled() {
+                eprintln!(
+                    "  search {}: chance moves the score by a factor {chance:.4}",
+                    round + 1
+                );
+            }
+            match verdict(&best, current_score, chance, table_mass_kg) {
                 Verdict::Cause => {
                     let (cause, extended) = self.accept(best, &current, &missed, round);
                     causes.push(cause);
@@ -193,6 +200,7 @@ impl<'a> Diagnoser<'a> {
                 Verdict::NoGain => break,
             }
         }
+        self.prune(&mut causes, &mut partial, &mut current);
         Found {
             causes,
             partial,

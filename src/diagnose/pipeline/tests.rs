@@ -36,17 +36,29 @@ fn the_best_candidate_is_the_best_that_is_evidence() {
     assert_eq!(best_candidate(&[], 4e4), None);
 }
 
-/// A cause needs the gain on the selection quarter, physics and evidence; a candidate
-/// with the gain but no evidence is partial.
+/// A cause needs the gain on the selection quarter, beyond what chance moves the score
+/// by, physics and evidence; a candidate with the gain but no evidence is partial.
 #[test]
 fn the_verdict_needs_gain_physics_and_evidence() {
     let mut c = Candidate::empty(Effect::ValveDeadband);
     c.score = 1.0;
     assert!(matches!(
-        verdict(&c, REQUIRED_GAIN * 0.99, 4e4),
+        verdict(&c, REQUIRED_GAIN * 0.99, 1.0, 4e4),
         Verdict::NoGain
     ));
-    assert!(matches!(verdict(&c, REQUIRED_GAIN, 4e4), Verdict::Cause));
+    assert!(matches!(
+        verdict(&c, REQUIRED_GAIN, 1.0, 4e4),
+        Verdict::Cause
+    ));
+    // a chaotic model whose score chance moves by 30 %
+    assert!(matches!(
+        verdict(&c, 1.3 * REQUIRED_GAIN * 0.99, 1.3, 4e4),
+        Verdict::NoGain
+    ));
+    assert!(matches!(
+        verdict(&c, 1.3 * REQUIRED_GAIN, 1.3, 4e4),
+        Verdict::Cause
+    ));
     c.not_evidence = Some("at a bound".into());
-    assert!(matches!(verdict(&c, 10.0, 4e4), Verdict::Partial(_)));
+    assert!(matches!(verdict(&c, 10.0, 1.0, 4e4), Verdict::Partial(_)));
 }

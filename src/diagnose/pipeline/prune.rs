@@ -1,0 +1,120 @@
+//! The backward step after the searches: a cause the others make unneeded is taken out
+//! again. A search names the best candidate on the model it extends, and an effect can
+//! stand in for one found later (seed 12: a static friction ratio of 5.4 took the first
+//! search in place of a 0.30-mm free play, whose bounces at every reversal look like a
+//! static friction bump; the play was named in the second).
+
+use super::{Current, Diagnoser, REQUIRED_GAIN};
+use crate::diagnose::candidates::heldout_scores;
+use crate::diagnose::missed::Missed;
+use crate::diagnose::output::{Cause, Partial};
+use crate::diagnose::trace_enabled;
+use rayon::prelude::*;
+
+/// The model without cause `k` and how far the model with it divides that model's
+/// selection score, on the cells the model without it misses (the forward rule's test,
+/// taken from the other side).
+struct Without {
+    k: usize,
+    model: Current,
+    gain: f64,
+    chance: f64,
+}
+
+impl Diagnoser<'_> {
+    /// While two causes or more are named: each taken out of the final model `current` in
+    /// turn (the others and every refined parameter kept); the one whose removal changes
+    /// the selection score least is dropped, and listed in `partial`, when the model with
+    /// it would not pass the forward rule on top of the model without it (divide its
+    /// score by [`REQUIRED_GAIN`] times what chance moves it by). Selection quarter only.
+    /// After a drop, each remaining cause's gain is measured again on the final
+    /// parameters: the report residual with the causes before it over that with it too.
+    pub(super) fn prune(
+        &self,
+        causes: &mut Vec<Cause>,
+        partial: &mut Vec<Partial>,
+        current: &mut Current,
+    ) {
+        let mut dropped = false;
+        while causes.len() >= 2 {
+            let weakest = (0..causes.len())
+                .into_par_iter()
+                .map(|k| self.without(causes, k, current))
+                .min_by(|a, b| a.gain.total_cmp(&b.gain));
+            let Some(w) = weakest else { break };
+            if trace_enabled() {
+                eprintln!(
+                    "  without {}: the causes divide its score by {:.3} (chance {:.4})",
+                    causes[w.k].effect.name(),
+                    w.gain,
+                    w.chance
+                );
+            }
+            if w.gain >= REQUIRED_GAIN * w.chance {
+                break;
+            }
+            let cause = causes.remove(w.k);
+            let others: Vec<&str> = causes.iter().map(|c| c.effect.name()).collect();
+            partial.push(Partial {
+                effect: cause.effect,
+                parameters: cause.parameters,
+                selection_gain: w.gain,
+                why_not_a_cause: format!(
+                    "not needed once {} is in the model: with it the selection score is \
+                     divided by {:.3} only, below {REQUIRED_GAIN} times the factor {:.3} \
+                     by which chance moves it",
+                    others.join(" and "),
+                    w.gain,
+                    w.chance
+                ),
+            });
+            *current = w.model;
+            dropped = true;
+        }
+        if dropped {
+            self.regain(causes, current);
+        }
+    }
+
+    /// `current` without cause `k`, scored, and the forward rule's figures for it.
+    fn without(&self, causes: &[Cause], k: usize, current: &Current) -> Without {
+        let mut params = current.params;
+        causes[k].effect.catalogue().set_enabled(&mut params, false);
+        let (select, report) = heldout_scores(&params, self.c, &self.tests, &self.noise, None);
+        let model = Current {
+            params,
+            section4: current.section4,
+            select,
+            report,
+        };
+        let missed = Missed::of(&model.select.residual);
+        let gain = missed.rms(&model.select.score) / missed.rms(&current.select.score);
+        let chance = self.chance_factor(&model, &missed);
+        Without {
+            k,
+            model,
+            gain,
+            chance,
+        }
+    }
+
+    /// Each cause's report gain on the final parameters of `current`: the report residual
+    /// (on the baseline's missed cells) with the causes before it over that with it too.
+    fn regain(&self, causes: &mut [Cause], current: &Current) {
+        let report_with_first = |n: usize| {
+            let mut p = current.params;
+            for c in &causes[n..] {
+                c.effect.catalogue().set_enabled(&mut p, false);
+            }
+            let (_, report) = heldout_scores(&p, self.c, &self.tests, &self.noise, None);
+            self.report_missed.rms(&report.residual)
+        };
+        let residuals: Vec<f64> = (0..=causes.len())
+            .into_par_iter()
+            .map(report_with_first)
+            .collect();
+        for (k, cause) in causes.iter_mut().enumerate() {
+            cause.gain = residuals[k] / residuals[k + 1];
+        }
+    }
+}
