@@ -12,9 +12,9 @@ use super::free_play_fit::fit_free_play;
 use super::output::{Candidate, PartRows};
 use super::part::Part;
 use super::residuals::{CellScores, Cells, NoiseFloor, Whitening};
-use super::starts::{informed_start, starts};
+use super::starts::{informed_start, keep_each_frequency, starts};
 use super::stick_slip::fit_stick_slip;
-use super::{residuals, specimen_modes, trace_enabled};
+use super::{residuals, trace_enabled};
 use crate::campaign::Campaign;
 use crate::identify::lsq::minimise;
 use crate::params::Params;
@@ -248,11 +248,9 @@ pub(super) fn fit_candidate(
                 .map(|s| (s.0, &s.1 .0[..ne]))
                 .collect::<Vec<_>>()
         ));
-        all = match e.specimen_modes().filter(|&n| n > 1) {
-            // a further mode: the best start at each of its frequencies too
-            Some(n) => specimen_modes::keep_each_frequency(scored, effort.screened_starts(), |s| {
-                s.0[3 * (n - 1) + 1]
-            }),
+        all = match e.valley_frequency() {
+            // a resonance: the best start at each of its frequencies too
+            Some(k) => keep_each_frequency(scored, effort.screened_starts(), |s| s.0[k]),
             None => scored
                 .into_iter()
                 .take(effort.screened_starts())

@@ -65,6 +65,20 @@ impl Effect {
         }
     }
 
+    /// The index among [`Effect::parameters`] of the resonance frequency whose starts lie
+    /// in different valleys of the fit ([`super::starts::keep_each_frequency`]): the
+    /// foundation's, and a specimen's newest mode's. `None` for the other effects and the
+    /// first mode, whose starts are read off the apparent mass.
+    pub(super) fn valley_frequency(self) -> Option<usize> {
+        let key = match self {
+            Effect::Foundation => "frequency_hz",
+            Effect::SpecimenTwoModes => "mode2.frequency_hz",
+            Effect::SpecimenThreeModes => "mode3.frequency_hz",
+            _ => return None,
+        };
+        self.parameters().iter().position(|k| *k == key)
+    }
+
     /// The specimen's modes (1 to 3), `None` for the other effects.
     pub fn specimen_modes(self) -> Option<usize> {
         match self {

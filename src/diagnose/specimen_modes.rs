@@ -30,29 +30,6 @@ pub(super) fn modes_apart(p: &crate::params::Params) -> bool {
     (0..f.len()).all(|i| apart(f[i], &f[i + 1..]))
 }
 
-/// The `keep` best of a further mode's screened starts (`scored`, best first), plus the
-/// best start at each further frequency of the newest mode (`newest_hz`), [`apart`] from
-/// those kept: starts at different peaks lead to different valleys, and one evaluation
-/// ranks a start by how well its guessed mass and damping fit, not by its valley (seed
-/// 911: two starts of a 4-t mode at 21 Hz screened better than the 8-t mode at 9.5 Hz that
-/// dominated the residual, so the two-mode fit took 21 Hz and gained 1.07).
-pub(super) fn keep_each_frequency<T>(
-    scored: Vec<(f64, T)>,
-    keep: usize,
-    newest_hz: impl Fn(&T) -> f64,
-) -> Vec<T> {
-    let mut kept_hz: Vec<f64> = Vec::new();
-    let mut kept = Vec::new();
-    for (k, (_, start)) in scored.into_iter().enumerate() {
-        let f = newest_hz(&start);
-        if k < keep || apart(f, &kept_hz) {
-            kept_hz.push(f);
-            kept.push(start);
-        }
-    }
-    kept
-}
-
 /// The three fields of a mode, in [`SpecimenMode`]'s order.
 const FIELDS: [&str; 3] = ["mass_kg", "frequency_hz", "damping_ratio"];
 
@@ -137,23 +114,6 @@ mod tests {
             c.sigma.insert(k.to_string(), v * 0.01);
         }
         c
-    }
-
-    /// The best starts are kept, then the best of each further frequency: 21 and 21.25 Hz
-    /// are one valley, 9.5 Hz another.
-    #[test]
-    fn a_start_is_kept_at_each_frequency_of_the_new_mode() {
-        let scored = vec![
-            (1.0, 21.0),
-            (1.1, 21.0),
-            (1.2, 9.5),
-            (1.5, 21.25),
-            (2.0, 9.6),
-            (3.0, 40.0),
-        ];
-        let kept = keep_each_frequency(scored.clone(), 2, |f| *f);
-        assert_eq!(kept, [21.0, 21.0, 9.5, 40.0]);
-        assert_eq!(keep_each_frequency(scored, 1, |f| *f), [21.0, 9.5, 40.0]);
     }
 
     /// A mode found below the first becomes mode 1: the model, the keys and the sigmas

@@ -60,10 +60,11 @@ impl Diagnoser<'_> {
                 parameters: cause.parameters,
                 selection_gain: w.gain,
                 why_not_a_cause: format!(
-                    "not needed once {} is in the model: with it the selection score is \
+                    "not needed once {} {} in the model: with it the selection score is \
                      divided by {:.3} only, below {REQUIRED_GAIN} times the factor {:.3} \
                      by which chance moves it",
                     others.join(" and "),
+                    if others.len() == 1 { "is" } else { "are" },
                     w.gain,
                     w.chance
                 ),
