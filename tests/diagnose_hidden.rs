@@ -251,10 +251,12 @@ fn check_one(base: &Params, effect: &str, key: &str, tol: f64, seed: u64) {
     assert!(o.gain >= 1.5, "{spec}: gain {}", o.gain);
 }
 
+/// One seed: the specimen is also drawn with two and three modes (104, 111), on the
+/// first-order valve (601) and beside stick-slip and a deadband (801, 803); seed 102 left
+/// to keep CI under an hour (`SHAKETABLE_HIDDEN_SEEDS=102` runs it).
 #[test]
 fn finds_a_specimen() {
     check(&Params::trees_lab(), "specimen", "frequency_hz", 0.05, 101);
-    check(&Params::trees_lab(), "specimen", "frequency_hz", 0.05, 102);
 }
 
 /// A specimen of several modes (spec section 7, second part), a building model's: each

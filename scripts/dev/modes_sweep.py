@@ -40,14 +40,17 @@ def seeds(text):
 
 
 def draw(rng, table_kg, n):
-    modes = []
-    f = rng.uniform(2.0, 8.0)
-    m = rng.uniform(0.2, 0.8) * table_kg
-    for k in range(n):
-        if k > 0:
-            f = min(f * rng.uniform(2.5, 3.5), rng.uniform(0.85, 0.98) * HIGHEST_MODE_HZ)
-            m *= rng.uniform(0.3, 0.7)
-        modes.append((m, f, rng.uniform(0.01, 0.04)))
+    while True:
+        modes = []
+        f = rng.uniform(2.0, 8.0)
+        m = rng.uniform(0.2, 0.8) * table_kg
+        for k in range(n):
+            if k > 0:
+                f *= rng.uniform(2.5, 3.5)
+                m *= rng.uniform(0.3, 0.7)
+            modes.append((m, f, rng.uniform(0.01, 0.04)))
+        if f < HIGHEST_MODE_HZ:
+            break
     keys = []
     for k, (m, f, z) in enumerate(modes):
         p = "" if k == 0 else f"mode{k + 1}."

@@ -274,10 +274,12 @@ impl Diagnoser<'_> {
                 let (select, _) =
                     heldout_scores(&p, self.c, &self.tests, &self.noise, Some(&current.hold()));
                 let moved = missed.rms(&select.score);
-                // a run that diverges under the change is as chaotic as it gets
                 (moved / score).max(score / moved)
             })
-            .reduce(|| 1.0, |a, b| if b.is_nan() || b > a { b } else { a })
+            // a change that leaves the envelope where the model stayed inside (an infinite
+            // score) or a score of zero says nothing of chance: not counted
+            .filter(|ratio| ratio.is_finite())
+            .reduce(|| 1.0, f64::max)
     }
 
     /// `from` refined like the baseline (every fitting test, the friction shape and valve
@@ -483,8 +485,16 @@ enum Verdict {
 /// selection quarter's missed cells: a cause when it divides that score by at least
 /// [`REQUIRED_GAIN`] (on data no fit has seen), is physical and is evidence.
 fn verdict(best: &Candidate, current_score: f64, chance: f64, table_mass_kg: f64) -> Verdict {
-    if !(current_score / best.score >= REQUIRED_GAIN * chance) {
+    let gain = current_score / best.score;
+    if !(gain >= REQUIRED_GAIN) {
         return Verdict::NoGain;
+    }
+    if !(gain >= REQUIRED_GAIN * chance) {
+        return Verdict::Partial(format!(
+            "it divides the selection score by {gain:.3}, below {REQUIRED_GAIN} times the \
+             factor {chance:.3} by which chance moves that score (the model it extends is \
+             rough: a 0.1 % change of the table mass moves its score by that factor)"
+        ));
     }
     if let Some(why) = unphysical(best, table_mass_kg) {
         return Verdict::Partial(why);

@@ -228,9 +228,10 @@ pub(super) fn keep_each_frequency<T>(
 ) -> Vec<T> {
     let mut kept_hz: Vec<f64> = Vec::new();
     let mut kept = Vec::new();
-    for (k, (_, start)) in scored.into_iter().enumerate() {
+    for (k, (cost, start)) in scored.into_iter().enumerate() {
         let f = frequency_hz(&start);
-        if k < keep || apart(f, &kept_hz) {
+        // a start whose screening run failed (infinite cost) is kept only among the best
+        if k < keep || (cost.is_finite() && apart(f, &kept_hz)) {
             kept_hz.push(f);
             kept.push(start);
         }
@@ -364,10 +365,22 @@ mod tests {
             (1.5, 21.25),
             (2.0, 9.6),
             (3.0, 40.0),
+            (f64::INFINITY, 5.0),
         ];
         let kept = keep_each_frequency(scored.clone(), 2, |f| *f);
         assert_eq!(kept, [21.0, 21.0, 9.5, 40.0]);
         assert_eq!(keep_each_frequency(scored, 1, |f| *f), [21.0, 9.5, 40.0]);
+    }
+
+    /// The frequency whose starts are told apart is the foundation's and the newest mode's.
+    #[test]
+    fn the_valley_frequency_is_the_resonance_a_fit_adds() {
+        let key = |e: Effect| e.valley_frequency().map(|k| e.parameters()[k]);
+        assert_eq!(key(Effect::Foundation), Some("frequency_hz"));
+        assert_eq!(key(Effect::SpecimenTwoModes), Some("mode2.frequency_hz"));
+        assert_eq!(key(Effect::SpecimenThreeModes), Some("mode3.frequency_hz"));
+        assert_eq!(key(Effect::Specimen), None);
+        assert_eq!(key(Effect::ValveDeadband), None);
     }
 
     use crate::campaign::synth::{synthesise, SynthOptions};

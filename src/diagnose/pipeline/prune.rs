@@ -23,24 +23,29 @@ struct Without {
 
 impl Diagnoser<'_> {
     /// While two causes or more are named: each taken out of the final model `current` in
-    /// turn (the others and every refined parameter kept); the one whose removal changes
-    /// the selection score least is dropped, and listed in `partial`, when the model with
-    /// it would not pass the forward rule on top of the model without it (divide its
-    /// score by [`REQUIRED_GAIN`] times what chance moves it by). Selection quarter only.
-    /// After a drop, each remaining cause's gain is measured again on the final
-    /// parameters: the report residual with the causes before it over that with it too.
+    /// turn (the others and every refined parameter kept); the one whose removal raises
+    /// the selection score least against its bar is dropped, and listed in `partial`, when
+    /// the model with it would not pass the forward rule on top of the model without it
+    /// (divide its score by [`REQUIRED_GAIN`] times what chance moves it by). Selection
+    /// quarter only. After a drop, each remaining cause's gain is measured again on the
+    /// final parameters ([`Self::regain`]; `baseline_report` is the baseline's report
+    /// residual on its missed cells).
     pub(super) fn prune(
         &self,
         causes: &mut Vec<Cause>,
         partial: &mut Vec<Partial>,
         current: &mut Current,
+        baseline_report: f64,
     ) {
         let mut dropped = false;
         while causes.len() >= 2 {
+            // a removal whose score is not finite (a run that left the envelope or
+            // diverged without the cause) is no case for dropping it
             let weakest = (0..causes.len())
                 .into_par_iter()
                 .map(|k| self.without(causes, k, current))
-                .min_by(|a, b| a.gain.total_cmp(&b.gain));
+                .filter(|w| w.gain.is_finite())
+                .min_by(|a, b| (a.gain / a.chance).total_cmp(&(b.gain / b.chance)));
             let Some(w) = weakest else { break };
             if trace_enabled() {
                 eprintln!(
@@ -60,9 +65,9 @@ impl Diagnoser<'_> {
                 parameters: cause.parameters,
                 selection_gain: w.gain,
                 why_not_a_cause: format!(
-                    "not needed once {} {} in the model: with it the selection score is \
-                     divided by {:.3} only, below {REQUIRED_GAIN} times the factor {:.3} \
-                     by which chance moves it",
+                    "not needed once {} {} in the model: taking it out of the final model \
+                     raises the selection score by a factor {:.3} only, below \
+                     {REQUIRED_GAIN} times the factor {:.3} by which chance moves it",
                     others.join(" and "),
                     if others.len() == 1 { "is" } else { "are" },
                     w.gain,
@@ -73,18 +78,20 @@ impl Diagnoser<'_> {
             dropped = true;
         }
         if dropped {
-            self.regain(causes, current);
+            self.regain(causes, current, baseline_report);
         }
     }
 
     /// `current` without cause `k`, scored, and the forward rule's figures for it.
     fn without(&self, causes: &[Cause], k: usize, current: &Current) -> Without {
-        let mut params = current.params;
-        causes[k].effect.catalogue().set_enabled(&mut params, false);
+        let (mut params, mut section4) = (current.params, current.section4);
+        let effect = causes[k].effect.catalogue();
+        effect.set_enabled(&mut params, false);
+        effect.set_enabled(&mut section4, false);
         let (select, report) = heldout_scores(&params, self.c, &self.tests, &self.noise, None);
         let model = Current {
             params,
-            section4: current.section4,
+            section4,
             select,
             report,
         };
@@ -100,20 +107,26 @@ impl Diagnoser<'_> {
     }
 
     /// Each cause's report gain on the final parameters of `current`: the report residual
-    /// (on the baseline's missed cells) with the causes before it over that with it too.
-    fn regain(&self, causes: &mut [Cause], current: &Current) {
-        let report_with_first = |n: usize| {
+    /// (on the baseline's missed cells) with the causes before it over that with it too;
+    /// the first cause's against the baseline's `baseline_report`, so the gains multiply
+    /// out to the diagnosis' gain, as [`Diagnoser::accept`]'s do.
+    fn regain(&self, causes: &mut [Cause], current: &Current, baseline_report: f64) {
+        let n = causes.len();
+        let report_with_first = |m: usize| {
+            if m == 0 {
+                return baseline_report;
+            }
+            if m == n {
+                return self.report_missed.rms(&current.report.residual);
+            }
             let mut p = current.params;
-            for c in &causes[n..] {
+            for c in &causes[m..] {
                 c.effect.catalogue().set_enabled(&mut p, false);
             }
             let (_, report) = heldout_scores(&p, self.c, &self.tests, &self.noise, None);
             self.report_missed.rms(&report.residual)
         };
-        let residuals: Vec<f64> = (0..=causes.len())
-            .into_par_iter()
-            .map(report_with_first)
-            .collect();
+        let residuals: Vec<f64> = (0..=n).into_par_iter().map(report_with_first).collect();
         for (k, cause) in causes.iter_mut().enumerate() {
             cause.gain = residuals[k] / residuals[k + 1];
         }

@@ -161,6 +161,7 @@ impl<'a> Diagnoser<'a> {
         let mut first_candidates = Vec::new();
         let mut cause_rejected = None;
         let mut searched = self.testable.clone();
+        let baseline_report = self.report_missed.rms(&current.report.residual);
         for round in 0..MAX_CAUSES {
             let Some((candidates, k, missed)) = self.search(&current, &searched, round) else {
                 break;
@@ -172,13 +173,19 @@ impl<'a> Diagnoser<'a> {
             // a specimen of several modes is the specimen
             searched.retain(|&e| e.name() != best.effect.name());
             let current_score = missed.rms(&current.select.score);
-            let chance = self.chance_factor(&current, &missed);
-            if crate::diagnose::trace_enabled() {
-                eprintln!(
-                    "  search {}: chance moves the score by a factor {chance:.4}",
-                    round + 1
-                );
-            }
+            // chance only raises the bar: not measured for a candidate below it anyway
+            let chance = if current_score / best.score >= super::REQUIRED_GAIN {
+                let chance = self.chance_factor(&current, &missed);
+                if crate::diagnose::trace_enabled() {
+                    eprintln!(
+                        "  search {}: chance moves the score by {chance:.4}",
+                        round + 1
+                    );
+                }
+                chance
+            } else {
+                1.0
+            };
             match verdict(&best, current_score, chance, table_mass_kg) {
                 Verdict::Cause => {
                     let (cause, extended) = self.accept(best, &current, &missed, round);
@@ -200,7 +207,7 @@ impl<'a> Diagnoser<'a> {
                 Verdict::NoGain => break,
             }
         }
-        self.prune(&mut causes, &mut partial, &mut current);
+        self.prune(&mut causes, &mut partial, &mut current, baseline_report);
         Found {
             causes,
             partial,

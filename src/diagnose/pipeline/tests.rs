@@ -50,10 +50,10 @@ fn the_verdict_needs_gain_physics_and_evidence() {
         verdict(&c, REQUIRED_GAIN, 1.0, 4e4),
         Verdict::Cause
     ));
-    // a chaotic model whose score chance moves by 30 %
+    // a rough model whose score chance moves by 30 %: the gain is partial at most
     assert!(matches!(
         verdict(&c, 1.3 * REQUIRED_GAIN * 0.99, 1.3, 4e4),
-        Verdict::NoGain
+        Verdict::Partial(_)
     ));
     assert!(matches!(
         verdict(&c, 1.3 * REQUIRED_GAIN, 1.3, 4e4),
