@@ -24,10 +24,12 @@
 //!    [`REQUIRED_GAIN`] and each mode is evidence ([`specimen_modes`], up to three).
 //! 5. The best candidate by score on the cells the current model misses in the
 //!    selection quarter is a cause when it divides that model's score by at least
-//!    [`REQUIRED_GAIN`], is physical and is evidence (no parameter at a bound, its
-//!    strength significant: [`evidence`]); then the search repeats with the causes in the
-//!    model ([`pipeline::MAX_CAUSES`] at most). A candidate with the gain but no evidence
-//!    is listed as a partial explanation.
+//!    [`REQUIRED_GAIN`] times what chance moves that score by (a rough model's: free
+//!    play), is physical and is evidence (no parameter at a bound, its strength
+//!    significant: [`evidence`]); then the search repeats with the causes in the model
+//!    ([`pipeline::MAX_CAUSES`] at most). A candidate with the gain but no evidence is
+//!    listed as a partial explanation. With two causes or more, one the others make
+//!    unneeded is dropped again (the backward step, `pipeline/prune.rs`).
 //! 6. The gain and `explained` on the report quarter only, which no fit and no decision
 //!    saw ([`Part`]); `explained` when every report cell the baseline missed is within
 //!    [`EXPLAINED_RATIO`]; otherwise the cells still missed are located ([`locate`]).
