@@ -483,12 +483,20 @@ enum Verdict {
 
 /// The verdict on `best` against the model it extends, scored `current_score` on the
 /// selection quarter's missed cells: a cause when it divides that score by at least
-/// [`REQUIRED_GAIN`] (on data no fit has seen), is physical and is evidence.
-fn verdict(best: &Candidate, current_score: f64, chance: f64, table_mass_kg: f64) -> Verdict {
+/// [`REQUIRED_GAIN`] times the factor `chance` moves it by (on data no fit has seen), is
+/// physical and is evidence. `chance` is measured only for a gain past [`REQUIRED_GAIN`]
+/// (it can only raise the bar, and costs two runs of the campaign).
+fn verdict(
+    best: &Candidate,
+    current_score: f64,
+    chance: impl FnOnce() -> f64,
+    table_mass_kg: f64,
+) -> Verdict {
     let gain = current_score / best.score;
     if !(gain >= REQUIRED_GAIN) {
         return Verdict::NoGain;
     }
+    let chance = chance();
     if !(gain >= REQUIRED_GAIN * chance) {
         return Verdict::Partial(format!(
             "it divides the selection score by {gain:.3}, below {REQUIRED_GAIN} times the \

@@ -173,8 +173,7 @@ impl<'a> Diagnoser<'a> {
             // a specimen of several modes is the specimen
             searched.retain(|&e| e.name() != best.effect.name());
             let current_score = missed.rms(&current.select.score);
-            // chance only raises the bar: not measured for a candidate below it anyway
-            let chance = if current_score / best.score >= super::REQUIRED_GAIN {
+            let chance = || {
                 let chance = self.chance_factor(&current, &missed);
                 if crate::diagnose::trace_enabled() {
                     eprintln!(
@@ -183,8 +182,6 @@ impl<'a> Diagnoser<'a> {
                     );
                 }
                 chance
-            } else {
-                1.0
             };
             match verdict(&best, current_score, chance, table_mass_kg) {
                 Verdict::Cause => {

@@ -43,22 +43,30 @@ fn the_verdict_needs_gain_physics_and_evidence() {
     let mut c = Candidate::empty(Effect::ValveDeadband);
     c.score = 1.0;
     assert!(matches!(
-        verdict(&c, REQUIRED_GAIN * 0.99, 1.0, 4e4),
+        verdict(&c, REQUIRED_GAIN * 0.99, || 1.0, 4e4),
         Verdict::NoGain
     ));
     assert!(matches!(
-        verdict(&c, REQUIRED_GAIN, 1.0, 4e4),
+        verdict(&c, REQUIRED_GAIN, || 1.0, 4e4),
         Verdict::Cause
     ));
     // a rough model whose score chance moves by 30 %: the gain is partial at most
     assert!(matches!(
-        verdict(&c, 1.3 * REQUIRED_GAIN * 0.99, 1.3, 4e4),
+        verdict(&c, 1.3 * REQUIRED_GAIN * 0.99, || 1.3, 4e4),
         Verdict::Partial(_)
     ));
     assert!(matches!(
-        verdict(&c, 1.3 * REQUIRED_GAIN, 1.3, 4e4),
+        verdict(&c, 1.3 * REQUIRED_GAIN, || 1.3, 4e4),
         Verdict::Cause
     ));
+    // chance is not measured for a gain that fails the plain rule
+    assert!(matches!(
+        verdict(&c, REQUIRED_GAIN * 0.99, || unreachable!(), 4e4),
+        Verdict::NoGain
+    ));
     c.not_evidence = Some("at a bound".into());
-    assert!(matches!(verdict(&c, 10.0, 1.0, 4e4), Verdict::Partial(_)));
+    assert!(matches!(
+        verdict(&c, 10.0, || 1.0, 4e4),
+        Verdict::Partial(_)
+    ));
 }
