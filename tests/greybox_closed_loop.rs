@@ -135,6 +135,9 @@ fn recovers(variant: u64, valve_tolerance: f64, oil_tolerance: f64) {
             );
             assert!(sigma.is_finite() && sigma > 0.0, "{name}: sigma {sigma}");
         }
+        // a first-order valve's table is not given a second-order valve
+        let order = cl.valve_order.as_ref().expect("the valve order chosen");
+        assert_eq!(order.chosen, "first_order", "variant {variant}: {order:?}");
         // what the motion cannot tell is held and said so, not passed off as identified
         for key in ["table.mass_kg", "actuator.piston_area_m2", "controller.kv"] {
             assert!(
@@ -158,4 +161,56 @@ fn recovers(variant: u64, valve_tolerance: f64, oil_tolerance: f64) {
             assert!(f.fit_percent > 90.0, "{f:?}");
         }
     }
+}
+
+/// The TREES Lab table itself (a second-order valve at 20.5 Hz, damping 1.05, and the
+/// delta-P feedback on), the paper's program (30-s random tests) stripped to its motion
+/// (the three short tests of [`stripped_campaign`] do not pin the delta-P table: its
+/// first-order fit there has a loop gain 2.8 times too high, and the second-order one
+/// ends worse from that start): the data choose the second-order valve,
+/// whose natural frequency then comes out within 10 % (the delta-P path through the
+/// valve, held at zero, is carried by the leakage and bends it: 8 % measured), and the
+/// loop gain and feed-forward as closely as for a matching structure. The first-order
+/// valve left the loop gain 21 % high on this campaign (26.6 for 21.95).
+#[test]
+fn the_motion_tells_a_second_order_valve() {
+    let p = Params::trees_lab();
+    assert_eq!(p.servovalve.model, ServovalveModel::SecondOrder);
+    let opts = SynthOptions {
+        seed: 5,
+        random_duration_s: 30.0,
+        ..SynthOptions::default()
+    };
+    let program = shaketable::campaign::synth::selected_program(&opts);
+    let c = synthesise_program(&p, &program, &opts, None)
+        .unwrap_or_else(|e| panic!("{e}"))
+        .as_motion_only();
+    let id = identify(&c);
+    let cl = id.closed_loop.as_ref().expect("a closed-loop fit");
+    let order = cl.valve_order.as_ref().expect("the valve order chosen");
+    eprintln!("{order:?}");
+    for k in &cl.combinations {
+        eprintln!("  {} {:.4} {:?}", k.name, k.value, k.sigma);
+    }
+    assert_eq!(order.chosen, "second_order", "{order:?}");
+    assert!(order.second_order_cost.unwrap() < order.first_order_cost);
+    let loop_gain = p.controller.kp * p.actuator.flow_gain_m3_s / p.actuator.piston_area_m2;
+    let ff = p.controller.fv * p.actuator.flow_gain_m3_s / p.actuator.piston_area_m2;
+    for (name, want, tol) in [
+        ("loop_gain_1_s", loop_gain, 0.05),
+        ("feed_forward_ratio", ff, 0.10),
+        (
+            "valve_natural_frequency_hz",
+            p.servovalve.natural_frequency_hz,
+            0.10,
+        ),
+    ] {
+        let (got, sigma) = combination(&id, name);
+        eprintln!("TREES Lab: {name} {got:.4} (sigma {sigma:.2e}) for {want:.4}");
+        assert!(
+            ((got - want) / want).abs() < tol,
+            "{name} = {got} for {want}"
+        );
+    }
+    assert_eq!(cl.params.servovalve.model, ServovalveModel::SecondOrder);
 }

@@ -22,7 +22,8 @@ pub enum Source {
         offset: f64,
     },
     /// Computed in the frequency domain from the recorded reference `channel`: its
-    /// derivative of `order` (a negative order is an integral, mean removed).
+    /// derivative of `order` (a negative order is an integral, corrected to rest where
+    /// the record starts and ends at rest).
     Computed { channel: &'static str, order: i32 },
     /// The time base made from the sample rate (no time column mapped).
     SampleRate { sample_rate_hz: f64 },

@@ -322,8 +322,8 @@ pub fn identify_screened_with(s: &Screening, scope: Scope) -> Identification {
         oil_column: oil.is_some(),
         friction: friction.is_some(),
     };
-    let closed_loop =
-        closed_loop(c, &p, known, &unknown_inputs).and_then(|r| r.map_err(|e| note(Err(e))).ok());
+    let closed_loop = closed_loop(c, &p, known, &unknown_inputs, scope)
+        .and_then(|r| r.map_err(|e| note(Err(e))).ok());
     if let Some(cl) = &closed_loop {
         p = cl.params;
     }
@@ -384,19 +384,32 @@ fn motion_tests(c: &Campaign) -> Vec<usize> {
 }
 
 /// The grey-box fit of the closed loop when something the simulation needs is neither
-/// given nor identified (`None` when the section-4 chain gave everything).
+/// given nor identified (`None` when the section-4 chain gave everything). The `identify`
+/// command lets the data choose the valve's order; the diagnosis keeps the first-order
+/// valve (see [`greybox::ValveOrderChoice`]).
 fn closed_loop(
     c: &Campaign,
     p: &Params,
     known: greybox::Known,
     unknown_inputs: &[&'static str],
+    scope: Scope,
 ) -> Option<Result<greybox::ClosedLoopFit, IdentifyError>> {
     let complete = known.servovalve && known.mass && known.oil_column && known.friction;
     let gains_known = !unknown_inputs.iter().any(|k| k.starts_with("controller."));
     if complete && gains_known {
         return None;
     }
-    Some(greybox::fit_closed_loop(c, &motion_tests(c), p, known))
+    let valve = match scope {
+        Scope::Complete => greybox::ValveOrderChoice::ByData,
+        Scope::Parameters => greybox::ValveOrderChoice::FirstOrder,
+    };
+    Some(greybox::fit_closed_loop(
+        c,
+        &motion_tests(c),
+        p,
+        known,
+        valve,
+    ))
 }
 
 /// The identified model against every test with a measured motion (the section-4

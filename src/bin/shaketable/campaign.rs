@@ -5,6 +5,7 @@ use anyhow::Context;
 use indicatif::{ProgressBar, ProgressStyle};
 use shaketable::campaign::format::read_campaign;
 use shaketable::campaign::synth::{self, NoiseLevels, SynthOptions, DEFAULT_RANDOM_DURATION_S};
+use shaketable::campaign::TestSpec;
 use shaketable::output::{self, Inputs};
 use shaketable::solver::DEFAULT_MAX_SUBSTEP_S;
 use std::path::PathBuf;
@@ -73,6 +74,10 @@ struct SynthArgs {
     /// Largest solver sub-step, s.
     #[arg(long, default_value_t = DEFAULT_MAX_SUBSTEP_S, value_name = "S")]
     max_substep: f64,
+    /// Sample rate of every record, Hz (a laboratory's data-acquisition rate; the
+    /// references are the same continuous signals at any rate).
+    #[arg(long, default_value_t = synth::SAMPLE_RATE_HZ, value_name = "HZ")]
+    sample_rate: f64,
     /// Overwrite OUT_DIR even if it holds a campaign that is not synthetic.
     #[arg(long)]
     force: bool,
@@ -130,15 +135,15 @@ fn run_synth(a: SynthArgs) -> anyhow::Result<()> {
         inputs.add(p);
     }
     let out = output::plan_dir(&a.out_dir, SYNTH_COMMAND, a.force, &inputs)?;
-    warn_if_unstable(&params, &synth::selected_program(&opts), "");
-    let program = synth::selected_program(&opts);
+    let program = at_rate(synth::selected_program(&opts), a.sample_rate);
+    warn_if_unstable(&params, &program, "");
     let table_s: f64 = program
         .iter()
         .map(|(_, s)| synth::test_duration_s(s, opts.random_duration_s))
         .sum();
     let total: u64 = program
         .iter()
-        .map(|(_, s)| synth::test_samples(s, opts.random_duration_s, synth::SAMPLE_RATE_HZ) as u64)
+        .map(|(_, s)| synth::test_samples(s, opts.random_duration_s, a.sample_rate) as u64)
         .sum();
     let bar = if a.quiet {
         ProgressBar::hidden()
@@ -183,12 +188,39 @@ fn run_synth(a: SynthArgs) -> anyhow::Result<()> {
     Ok(())
 }
 
+/// The program with every test at `rate_hz` (the synthesis default leaves it unset).
+fn at_rate(program: Vec<(usize, TestSpec)>, rate_hz: f64) -> Vec<(usize, TestSpec)> {
+    if rate_hz == synth::SAMPLE_RATE_HZ {
+        return program;
+    }
+    program
+        .into_iter()
+        .map(|(i, mut s)| {
+            s.sample_rate_hz = Some(rate_hz);
+            (i, s)
+        })
+        .collect()
+}
+
 /// The marker name of folders `campaign synth` makes (see [`output::plan_dir`]).
 const SYNTH_COMMAND: &str = "campaign synth";
 
+/// Lowest synthesis rate: the paper program's R1 and R3 are band-limited to 125 Hz, so
+/// their Nyquist frequency must lie above it.
+const MIN_SYNTH_RATE_HZ: f64 = 256.0;
+
 /// The options that size memory and run time, by their command-line names.
 fn check_synth_limits(a: &SynthArgs) -> anyhow::Result<()> {
-    use crate::limits::{at_least, within, MAX_RANDOM_DURATION_S, MIN_SUBSTEP_S};
+    use crate::limits::{
+        at_least, within, MAX_RANDOM_DURATION_S, MAX_SAMPLE_RATE_HZ, MIN_SUBSTEP_S,
+    };
+    within(
+        "--sample-rate",
+        a.sample_rate,
+        MIN_SYNTH_RATE_HZ,
+        MAX_SAMPLE_RATE_HZ,
+        "Hz; the paper program's random tests reach 125 Hz, MAX_SAMPLE_RATE_HZ at most",
+    )?;
     within(
         "--random-duration",
         a.random_duration,

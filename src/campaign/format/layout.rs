@@ -330,7 +330,7 @@ type Reference = (Vec<f64>, Vec<f64>, Vec<f64>);
 
 /// The three reference channels: those recorded, the others computed in the frequency
 /// domain from the one the test's control names (displacement: derivatives;
-/// acceleration: integrals without their mean).
+/// acceleration: integrals corrected to rest, see `integrate.rs`).
 fn reference(m: &mut Mapped, control: Control, fs: f64) -> Result<Reference, String> {
     let (xd, vd, ad) = (
         m.take("ref_displacement_m"),
@@ -344,9 +344,8 @@ fn reference(m: &mut Mapped, control: Control, fs: f64) -> Result<Reference, Str
             Ok((x, v, a))
         }
         (Control::Acceleration, x, Some(a)) => {
-            let v = vd.unwrap_or_else(|| spectral(&a, fs, -1));
-            let x = x.unwrap_or_else(|| spectral(&a, fs, -2));
-            Ok((x, v, a))
+            let (vi, xi) = super::integrate::velocity_and_displacement(&a, fs);
+            Ok((x.unwrap_or(xi), vd.unwrap_or(vi), a))
         }
         (Control::Displacement, None, _) => Err(
             "no `ref_displacement_m` after mapping: a displacement-controlled test needs its reference displacement".into(),

@@ -210,6 +210,7 @@ fn refusal(file: &str, r: Refusal) -> CampaignError {
 }
 
 mod csv;
+mod integrate;
 pub mod layout;
 mod toml_file;
 mod toml_gains;

@@ -133,14 +133,16 @@ pub type Progress<'a> = &'a (dyn Fn(u64, u64) + Sync);
 
 /// Synthesise any list of tests (`(index, spec)`: index selects the random streams) in
 /// parallel, each at its own `sample_rate_hz` if it has one, else at [`SAMPLE_RATE_HZ`]
-/// (the campaign's rate). The campaign's `[controller]` and geometry come from `params`.
+/// (the campaign's rate; a rate every test shares becomes the campaign's). The campaign's
+/// `[controller]` and geometry come from `params`.
 pub fn synthesise_program(
     params: &Params,
     program: &[(usize, TestSpec)],
     opts: &SynthOptions,
     progress: Option<Progress>,
 ) -> Result<Campaign, SynthError> {
-    let fs = SAMPLE_RATE_HZ;
+    let shared = shared_rate(program);
+    let fs = shared.unwrap_or(SAMPLE_RATE_HZ);
     let rate = |s: &TestSpec| s.sample_rate_hz.unwrap_or(fs);
     for (_, s) in program {
         check_spec(s, opts.random_duration_s, rate(s))?;
@@ -180,10 +182,26 @@ pub fn synthesise_program(
             sample_rate_hz: fs,
             geometry: Geometry::from_params(params),
             controller: ControllerOverride::known(&params.controller),
-            tests: program.iter().map(|(_, s)| s.clone()).collect(),
+            tests: program
+                .iter()
+                .map(|(_, s)| TestSpec {
+                    // a shared rate is said once, as the campaign's
+                    sample_rate_hz: s.sample_rate_hz.filter(|_| shared.is_none()),
+                    ..s.clone()
+                })
+                .collect(),
         },
         records,
     })
+}
+
+/// The sample rate every test of `program` sets, if they all set the same one.
+fn shared_rate(program: &[(usize, TestSpec)]) -> Option<f64> {
+    let first = program.first()?.1.sample_rate_hz?;
+    program
+        .iter()
+        .all(|(_, s)| s.sample_rate_hz == Some(first))
+        .then_some(first)
 }
 
 /// The paper's program (or the subset `opts.tests`) with `(index, spec)` pairs.

@@ -79,6 +79,20 @@ fn catalogue() -> Vec<(
             &[ValveTimeConstant],
         ),
         (
+            "valve_natural_frequency_hz",
+            "Hz",
+            "natural frequency of the second-order valve (paper eq. 4.2)",
+            |p| p.servovalve.natural_frequency_hz,
+            &[ValveNaturalFrequency],
+        ),
+        (
+            "valve_damping_ratio",
+            "1",
+            "damping ratio of the second-order valve (paper eq. 4.2)",
+            |p| p.servovalve.damping_ratio,
+            &[ValveDamping],
+        ),
+        (
             "friction_per_mass_m_s2",
             "m/s^2",
             "F_mu / M: the friction's deceleration of the moving mass",

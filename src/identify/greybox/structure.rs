@@ -58,6 +58,10 @@ const GAIN_FIXED_ZERO: &str = "unknown, and not separable from the parameters th
 const VALVE_FIRST_ORDER: &str = "no valve command and spool to identify the valve: the \
      first-order valve (paper eq. 4.1), whose time constant the fit frees, with unit gain \
      (the gain is not separable from the loop gain)";
+const VALVE_SECOND_ORDER: &str = "no valve command and spool to identify the valve: the \
+     second-order valve (paper eq. 4.2), whose natural frequency and damping the fit frees, \
+     with unit gain (the gain is not separable from the loop gain); chosen over the \
+     first-order valve because it follows the recorded motion better (see valve_order)";
 const SHAPE_KEPT: &str = "the friction's Bouc-Wen shape is not separable from its \
      amplitude and yield in the motion: kept";
 const YIELD_KEPT: &str = "without a force channel the friction's yield displacement is \
@@ -151,6 +155,35 @@ pub fn choose(p: &mut Params, c: &Campaign, tests: &[usize], known: Known) -> St
         free,
         conventions,
         with_force,
+    }
+}
+
+impl Structure {
+    /// The same fit with a second-order valve in place of the first-order one, and `p`
+    /// (a first-order fit's result) turned into its start: unit damping and the natural
+    /// frequency whose low-frequency lag `2 zeta / omega_n` is the time constant's.
+    /// `None` when the valve is not free.
+    pub fn with_second_order_valve(&self, p: &mut Params) -> Option<Structure> {
+        use GreyParameter::*;
+        let at = self.free.iter().position(|g| *g == ValveTimeConstant)?;
+        let mut free = self.free.clone();
+        free.splice(at..=at, [ValveNaturalFrequency, ValveDamping]);
+        p.servovalve.model = ServovalveModel::SecondOrder;
+        p.servovalve.damping_ratio = 1.0;
+        p.servovalve.natural_frequency_hz =
+            1.0 / (std::f64::consts::PI * p.servovalve.time_constant_s);
+        let mut conventions = self.conventions.clone();
+        for c in conventions
+            .iter_mut()
+            .filter(|c| c.key == "servovalve.gain")
+        {
+            c.reason = VALVE_SECOND_ORDER;
+        }
+        Some(Structure {
+            free,
+            conventions,
+            with_force: self.with_force,
+        })
     }
 }
 
