@@ -67,11 +67,12 @@ impl Effect {
 
     /// The index among [`Effect::parameters`] of the resonance frequency whose starts lie
     /// in different valleys of the fit ([`super::starts::keep_each_frequency`]): the
-    /// foundation's, and a specimen's newest mode's. `None` for the other effects and the
-    /// first mode, whose starts are read off the apparent mass.
+    /// foundation's, and a specimen's newest mode's (the first mode's starts lie at one
+    /// frequency when read off the apparent mass, on a blind grid without it). `None` for
+    /// the other effects.
     pub(super) fn valley_frequency(self) -> Option<usize> {
         let key = match self {
-            Effect::Foundation => "frequency_hz",
+            Effect::Foundation | Effect::Specimen => "frequency_hz",
             Effect::SpecimenTwoModes => "mode2.frequency_hz",
             Effect::SpecimenThreeModes => "mode3.frequency_hz",
             _ => return None,

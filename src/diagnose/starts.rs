@@ -27,10 +27,14 @@ mod grid {
     pub const APPARENT_MASS_MIN_SEGMENTS: usize = 8;
     /// The band of the apparent mass (Hz): where the random tests excite the table.
     pub const APPARENT_MASS_BAND_HZ: [f64; 2] = [1.0, 40.0];
-    /// Specimen masses (table masses) at the apparent mass's peak; without a random test
-    /// a 0.2 table-mass specimen at 5 Hz (the middle of the building-model range).
+    /// Specimen masses (table masses) at the apparent mass's peak.
     pub const SPECIMEN_MASS_RATIOS: [f64; 2] = [0.1, 0.3];
-    pub const SPECIMEN_BLIND: [f64; 3] = [0.2, 5.0, 0.03];
+    /// Without the apparent mass (no force or acceleration channel in a random test), a
+    /// blind grid over the building-model range (Hz) at a light and a heavy specimen
+    /// (table masses): a single start at 5 Hz slid to a 200-kg mode when the specimen was
+    /// 30 t at 4 Hz.
+    pub const SPECIMEN_BLIND_FREQUENCIES_HZ: [f64; 5] = [1.5, 3.0, 5.0, 8.0, 13.0];
+    pub const SPECIMEN_BLIND_MASS_RATIOS: [f64; 2] = [0.15, 0.6];
     /// A specimen's or foundation's starting damping ratios: typical of steel or RC
     /// models (3 %) and of a foundation block on soil (5 %).
     pub const SPECIMEN_DAMPING: f64 = 0.03;
@@ -91,8 +95,13 @@ pub(super) fn starts(
         Effect::Specimen => {
             // the specimen's resonance is the largest deviation of F/a from a rigid mass
             let Some((f, h)) = apparent_mass(c) else {
-                let [r, f, z] = grid::SPECIMEN_BLIND;
-                return vec![vec![r * m, f, z]];
+                let mut g = Vec::new();
+                for f in grid::SPECIMEN_BLIND_FREQUENCIES_HZ {
+                    for r in grid::SPECIMEN_BLIND_MASS_RATIOS {
+                        g.push(vec![r * m, f, grid::SPECIMEN_DAMPING]);
+                    }
+                }
+                return g;
             };
             let k = (0..f.len())
                 .max_by(|&a, &b| (h[a] - m).norm().total_cmp(&(h[b] - m).norm()))
@@ -379,7 +388,7 @@ mod tests {
         assert_eq!(key(Effect::Foundation), Some("frequency_hz"));
         assert_eq!(key(Effect::SpecimenTwoModes), Some("mode2.frequency_hz"));
         assert_eq!(key(Effect::SpecimenThreeModes), Some("mode3.frequency_hz"));
-        assert_eq!(key(Effect::Specimen), None);
+        assert_eq!(key(Effect::Specimen), Some("frequency_hz"));
         assert_eq!(key(Effect::ValveDeadband), None);
     }
 
