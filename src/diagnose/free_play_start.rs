@@ -83,6 +83,11 @@ pub(super) fn free_play_start(c: &Campaign, base: &Params, rod_mass_kg: f64) -> 
         return None;
     }
     let (gap, drift) = (median(at_reversals), median(mid_stroke));
+    if super::trace_enabled() {
+        eprintln!(
+            "  free_play reading: gap {gap:.4e} m at the reversals, drift {drift:.4e} m mid-stroke"
+        );
+    }
     let seen = gap > MIN_GAP_M && (drift.is_nan() || gap > NULL_FACTOR * drift);
     seen.then(|| vec![gap, rod_mass_kg])
 }
