@@ -60,6 +60,16 @@ pub fn text(cl: &ClosedLoopFit) -> String {
     for s in &cl.inseparable {
         let _ = writeln!(t, "  not separable: {s}");
     }
+    if let Some(v) = &cl.valve_order {
+        let second = v
+            .second_order_cost
+            .map_or("not simulated".to_string(), |c| format!("{c:.5}"));
+        let _ = writeln!(
+            t,
+            "  valve     {} (cost first order {:.5}, second order {second}; {:.0} effective samples; {})",
+            v.chosen, v.first_order_cost, v.effective_samples, v.rule
+        );
+    }
     for c in &cl.conventions {
         let _ = writeln!(
             t,
