@@ -136,8 +136,8 @@ pub(super) fn fit_free_play(
     let polish = |base: &Params, mut best: (f64, Vec<f64>)| {
         for _ in 0..RESTARTS {
             match nelder_mead(&|x: &[f64]| score(base, x), &best.1, best.0) {
-                Some((x, s)) if s < IMPROVEMENT * best.0 => best = (s, x),
-                Some((x, s)) if s < best.0 => return (s, x),
+                Some((x, s)) if s < IMPROVEMENT * best.0 => best = (s, held(&x)),
+                Some((x, s)) if s < best.0 => return (s, held(&x)),
                 _ => break,
             }
         }

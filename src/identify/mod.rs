@@ -131,6 +131,9 @@ fn check_moved(
 pub enum Scope {
     /// The parameters and their estimates only, what the diagnosis needs: no device fit,
     /// and no comparison of the model with every test unless the closed-loop fit made one.
+    /// A closed-loop fit with the valve free (no spool) keeps the first-order valve here
+    /// ([`greybox::ValveOrderChoice::FirstOrder`]), so its parameters may differ from
+    /// [`Scope::Complete`]'s, which lets the data choose the order.
     Parameters,
     /// Also the device force fit ([`Identification::device`]) and the identified model
     /// simulated against every test ([`Identification::comparison`]): the `identify`
@@ -575,7 +578,9 @@ mod tests {
     use crate::campaign::synth::{synthesise, SynthOptions};
 
     /// The diagnosis's identification ([`Scope::Parameters`]) identifies the same model as
-    /// the complete one and leaves out the device fit, which only the latter attempts.
+    /// the complete one (section 4 gives the valve from the spool here; without it the two
+    /// scopes' valve orders may differ) and leaves out the device fit, which only the
+    /// latter attempts.
     #[test]
     fn the_parameters_scope_identifies_the_same_model_without_the_device() {
         let opts = SynthOptions {

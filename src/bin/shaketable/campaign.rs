@@ -228,6 +228,16 @@ fn check_synth_limits(a: &SynthArgs) -> anyhow::Result<()> {
         MAX_RANDOM_DURATION_S,
         "s; two 0.5 s fades at least, MAX_RANDOM_DURATION_S at most",
     )?;
+    // the memory bound is on samples: MAX_RANDOM_DURATION_S at the synthesis' own rate
+    let most_samples = MAX_RANDOM_DURATION_S * synth::SAMPLE_RATE_HZ;
+    if a.random_duration * a.sample_rate > most_samples {
+        anyhow::bail!(
+            "--random-duration {} s at --sample-rate {} Hz: {:.3e} samples per random record, more than {most_samples:.3e} (MAX_RANDOM_DURATION_S at 512 Hz; the memory bound); shorten the record or lower the rate",
+            a.random_duration,
+            a.sample_rate,
+            a.random_duration * a.sample_rate
+        );
+    }
     at_least(
         "--max-substep",
         a.max_substep,

@@ -60,9 +60,10 @@ const LEAKAGE_CEILING_M3_S_PA: f64 = 1e-5;
 /// Servovalve time constants searched, s: from a 1.6 kHz valve to a 0.3 Hz one; real
 /// servovalves lie between 2 ms and 50 ms.
 const VALVE_TIME_CONSTANT_S: [f64; 2] = [1e-4, 0.5];
-/// Second-order valve natural frequencies searched, Hz: the same span as the time
-/// constants (a 0.3 Hz to a 1.6 kHz valve).
-const VALVE_NATURAL_FREQUENCY_HZ: [f64; 2] = [0.3, 1600.0];
+/// Second-order valve natural frequencies searched, Hz: the span of the time constants
+/// under the second-order start's mapping `f_n = 1 / (pi tau)` (0.64 Hz to 3.2 kHz), and
+/// a little beyond.
+const VALVE_NATURAL_FREQUENCY_HZ: [f64; 2] = [0.3, 3300.0];
 /// Second-order valve damping ratios searched: from a valve that rings (a 5-dB peak) to
 /// one so overdamped that it is a first-order valve with a far pole. Real servovalves lie
 /// between 0.5 and 1.5; a lightly damped "valve" is the fit mistaking it for the oil
