@@ -498,6 +498,22 @@ impl Campaign {
     }
 }
 
+/// Least-squares line `(intercept, slope)` of `y` against `t` (a flat line through the mean
+/// when `t` does not vary). The rest segments of a reference integrated to rest
+/// (`format/integrate.rs`) and the free play's levelling before a reversal
+/// (`diagnose/free_play_start.rs`) both fit it.
+pub(crate) fn line_fit(t: &[f64], y: &[f64]) -> (f64, f64) {
+    let n = t.len() as f64;
+    let (mt, my) = (t.iter().sum::<f64>() / n, y.iter().sum::<f64>() / n);
+    let (mut sty, mut stt) = (0.0, 0.0);
+    for (t, y) in t.iter().zip(y) {
+        sty += (t - mt) * (y - my);
+        stt += (t - mt) * (t - mt);
+    }
+    let s = if stt > 0.0 { sty / stt } else { 0.0 };
+    (my - s * mt, s)
+}
+
 /// The smallest and largest sample of `x`, NaN ignored; (inf, -inf) when there is none
 /// (screening's flat-channel check and the what-was-read table both read it).
 pub(crate) fn min_max(x: &[f64]) -> (f64, f64) {

@@ -132,7 +132,8 @@ pub(super) fn fit_free_play(
     if !first.is_finite() {
         return None;
     }
-    // Nelder-Mead restarted while it gains
+    // Nelder-Mead restarted while it gains; every point it keeps has its gap held, so
+    // `best` below never leaves the reading's span (the start is the reading itself)
     let polish = |base: &Params, mut best: (f64, Vec<f64>)| {
         for _ in 0..RESTARTS {
             match nelder_mead(&|x: &[f64]| score(base, x), &best.1, best.0) {
@@ -150,11 +151,10 @@ pub(super) fn fit_free_play(
     // refinement bent the friction, mass and leakage to absorb its impacts), then
     // polished again while the score improves
     for _ in 0..UNBENDING_ROUNDS {
-        let at = held(&best.1);
         let Some(unbent) = refine_output_error(
             c,
-            &model(&base, &at),
-            Some((e, &at[..2])),
+            &model(&base, &best.1),
+            Some((e, &best.1[..2])),
             &bases[0],
             fit_idx,
             whitening,
@@ -162,7 +162,7 @@ pub(super) fn fit_free_play(
         ) else {
             break;
         };
-        let mut x = held(&best.1);
+        let mut x = best.1.clone();
         for (k, (w, r)) in POLISHED.iter().zip(&ranges).enumerate() {
             x[2 + k] = w.get(&unbent.params).clamp(r.lower, r.upper);
         }
@@ -173,9 +173,8 @@ pub(super) fn fit_free_play(
         }
         (best, base) = (next, unbent.params);
     }
-    let x = held(&best.1);
-    let p = model(&base, &x);
-    Some((best.0, x[..2].to_vec(), p))
+    let p = model(&base, &best.1);
+    Some((best.0, best.1[..2].to_vec(), p))
 }
 
 /// Nelder-Mead (argmin) over the logs of `x0`'s entries with [`STEPS`]; the best point

@@ -8,7 +8,7 @@
 
 use super::effect::tests_of;
 use super::residuals::median;
-use crate::campaign::Campaign;
+use crate::campaign::{line_fit, Campaign};
 use crate::effects::SignatureTests;
 use crate::params::Params;
 
@@ -139,7 +139,8 @@ fn rise_after(x: &[f64], a: &[f64], k: usize, direction: f64, fs: f64) -> Option
         d.push(x[j] - p);
     }
     let level = before - ((LEVEL_MARGIN_S * fs) as usize).min(before - 2);
-    let (c0, c1) = line_fit(&d[..level]);
+    let j: Vec<f64> = (0..level).map(|j| j as f64).collect();
+    let (c0, c1) = line_fit(&j, &d[..level]);
     let rise: Vec<f64> = d[before..]
         .iter()
         .enumerate()
@@ -148,21 +149,6 @@ fn rise_after(x: &[f64], a: &[f64], k: usize, direction: f64, fs: f64) -> Option
     rise.windows(m.min(rise.len()))
         .map(|w| w.iter().sum::<f64>() / w.len() as f64)
         .max_by(f64::total_cmp)
-}
-
-/// Least-squares line `y = c0 + c1 j` through `y` at `j = 0, 1, ...`.
-fn line_fit(y: &[f64]) -> (f64, f64) {
-    let n = y.len() as f64;
-    let mj = (n - 1.0) / 2.0;
-    let my = y.iter().sum::<f64>() / n;
-    let (mut sxy, mut sxx) = (0.0, 0.0);
-    for (j, v) in y.iter().enumerate() {
-        let dj = j as f64 - mj;
-        sxy += dj * (v - my);
-        sxx += dj * dj;
-    }
-    let c1 = if sxx > 0.0 { sxy / sxx } else { 0.0 };
-    (my - c1 * mj, c1)
 }
 
 #[cfg(test)]

@@ -95,13 +95,12 @@ pub(super) fn starts(
         Effect::Specimen => {
             // the specimen's resonance is the largest deviation of F/a from a rigid mass
             let Some((f, h)) = apparent_mass(c) else {
-                let mut g = Vec::new();
-                for f in grid::SPECIMEN_BLIND_FREQUENCIES_HZ {
-                    for r in grid::SPECIMEN_BLIND_MASS_RATIOS {
-                        g.push(vec![r * m, f, grid::SPECIMEN_DAMPING]);
-                    }
-                }
-                return g;
+                return resonance_grid(
+                    m,
+                    &grid::SPECIMEN_BLIND_FREQUENCIES_HZ,
+                    &grid::SPECIMEN_BLIND_MASS_RATIOS,
+                    grid::SPECIMEN_DAMPING,
+                );
             };
             let k = (0..f.len())
                 .max_by(|&a, &b| (h[a] - m).norm().total_cmp(&(h[b] - m).norm()))
@@ -122,11 +121,12 @@ pub(super) fn starts(
                     g.push(vec![r * m, f[1], grid::FOUNDATION_DAMPING]);
                 }
             }
-            for f in grid::FOUNDATION_FREQUENCIES_HZ {
-                for r in grid::FOUNDATION_MASS_RATIOS {
-                    g.push(vec![r * m, f, grid::FOUNDATION_DAMPING]);
-                }
-            }
+            g.extend(resonance_grid(
+                m,
+                &grid::FOUNDATION_FREQUENCIES_HZ,
+                &grid::FOUNDATION_MASS_RATIOS,
+                grid::FOUNDATION_DAMPING,
+            ));
             g
         }
         Effect::StickSlip => {
@@ -221,6 +221,24 @@ fn higher_mode_starts(c: &Campaign, base: &Params) -> Vec<Vec<f64>> {
                 })
                 .map(|(m, fk)| fitted.clone().chain([m, fk, z]).collect()),
         )
+        .collect()
+}
+
+/// A blind grid of a resonance's starts `[mass_kg, frequency_hz, damping_ratio]`: every
+/// frequency at every mass (table masses of `table_mass_kg`), frequency by frequency.
+fn resonance_grid(
+    table_mass_kg: f64,
+    frequencies_hz: &[f64],
+    mass_ratios: &[f64],
+    damping_ratio: f64,
+) -> Vec<Vec<f64>> {
+    frequencies_hz
+        .iter()
+        .flat_map(|&f| {
+            mass_ratios
+                .iter()
+                .map(move |r| vec![r * table_mass_kg, f, damping_ratio])
+        })
         .collect()
 }
 

@@ -5,12 +5,14 @@
 //! band: a reference that steps (a raised-cosine fade starts with a jump in acceleration)
 //! integrates with an error of about half a sample times the step, a constant velocity
 //! error that drifts the displacement by millimetres over a 30-s test (8 mm end to end,
-//! 2.6 mm RMS, on a 5.7-mm RMS reference measured on the paper's R2). A test that starts and ends at rest pins
-//! that drift: the displacement is constant over both rest segments and the same at both,
-//! so the baseline is corrected by the lowest-order line through them (a constant
-//! velocity error over the motion), as strong-motion records are baseline-corrected.
+//! 2.6 mm RMS, on a 5.7-mm RMS reference measured on the paper's R2). A test that starts
+//! and ends at rest pins that drift: the displacement is constant over both rest segments
+//! and the same at both, so the baseline is corrected by the lowest-order line through
+//! them (a constant velocity error over the motion), as strong-motion records are
+//! baseline-corrected.
 
 use super::layout::spectral;
+use crate::campaign::line_fit;
 
 /// A reference at rest has an acceleration below this share of its peak: a command written
 /// by the controller is exactly zero at rest, one recorded through an ADC carries its
@@ -72,8 +74,8 @@ impl Baseline {
     /// The line fitted to each rest segment there, and the chord joining them over the
     /// motion (a constant velocity error between the two rests).
     fn through_rests(t: &[f64], x: &[f64], first: usize, last: usize) -> Baseline {
-        let (c0, s0) = line(&t[..first], &x[..first]);
-        let (c1, s1) = line(&t[last..], &x[last..]);
+        let (c0, s0) = line_fit(&t[..first], &x[..first]);
+        let (c1, s1) = line_fit(&t[last..], &x[last..]);
         let (t0, t1) = (t[first - 1], t[last]);
         let (y0, y1) = (c0 + s0 * t0, c1 + s1 * t1);
         Baseline(vec![
@@ -96,19 +98,6 @@ impl Baseline {
     fn slope_at(&self, t: f64) -> f64 {
         self.piece(t).1
     }
-}
-
-/// Least-squares line `(intercept, slope)` of `y` against `t`.
-fn line(t: &[f64], y: &[f64]) -> (f64, f64) {
-    let n = t.len() as f64;
-    let (mt, my) = (t.iter().sum::<f64>() / n, y.iter().sum::<f64>() / n);
-    let (mut sty, mut stt) = (0.0, 0.0);
-    for (t, y) in t.iter().zip(y) {
-        sty += (t - mt) * (y - my);
-        stt += (t - mt) * (t - mt);
-    }
-    let s = if stt > 0.0 { sty / stt } else { 0.0 };
-    (my - s * mt, s)
 }
 
 #[cfg(test)]

@@ -204,12 +204,13 @@ fn valve_order(
     q: Params,
     fit: LsqFit,
 ) -> (Structure, Params, LsqFit, Option<ValveOrder>) {
-    let mut q2 = with_search(&q, &s.free, &fit.theta);
+    let fitted = with_search(&q, &s.free, &fit.theta);
+    let mut q2 = fitted;
     let Some(s2) = s.with_second_order_valve(&mut q2) else {
         return (s, q, fit, None);
     };
     let fit2 = run_lsq(&q2, c, full, &s2.free, FINAL_ITERATIONS);
-    let r = residuals(&with_search(&q, &s.free, &fit.theta), c, full).unwrap_or_default();
+    let r = residuals(&fitted, c, full).unwrap_or_default();
     let n = r.len() as f64 / correlation_factor(&r);
     let mut order = ValveOrder {
         chosen: "first_order",
