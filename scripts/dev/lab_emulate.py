@@ -37,7 +37,7 @@ def run(args):
     return time.time() - t0
 
 
-def lab_file(src, dst, control, channels):
+def lab_file(src, dst, control, channels, ref_both):
     with open(src) as f:
         rows = list(csv.DictReader(f))
     cols = {k: [float(r[k]) for r in rows] for k in rows[0]}
@@ -45,6 +45,8 @@ def lab_file(src, dst, control, channels):
     out = {}
     volts = 1000.0 / MM_PER_V if ref.endswith("_m") else 1.0 / G
     out["REF"] = [v * volts for v in cols[ref]]
+    if ref_both and control == "acceleration":
+        out["REF_D"] = [v * 1000.0 / MM_PER_V for v in cols["ref_displacement_m"]]
     if "displacement" in channels:
         out["LVDT_mm"] = [v * 1000.0 for v in cols["displacement_m"]]
     if "acceleration" in channels:
@@ -57,7 +59,7 @@ def lab_file(src, dst, control, channels):
             f.write("\t".join([str(k + 1), *(f"{out[c][k]:.7g}" for c in out)]) + "\n")
 
 
-def lab_campaign(synth_dir, out_dir, rate_hz, channels):
+def lab_campaign(synth_dir, out_dir, rate_hz, channels, ref_both):
     with open(os.path.join(synth_dir, "campaign.toml"), "rb") as f:
         camp = tomllib.load(f)
     os.makedirs(out_dir, exist_ok=True)
@@ -82,6 +84,7 @@ def lab_campaign(synth_dir, out_dir, rate_hz, channels):
             os.path.join(out_dir, name + ".txt"),
             t["control"],
             channels,
+            ref_both,
         )
         lines += ["", "[[test]]", f'name = "{name}"', f'file = "{name}.txt"']
         lines += [f'kind = "{t["kind"]}"', f'control = "{t["control"]}"']
@@ -94,6 +97,8 @@ def lab_campaign(synth_dir, out_dir, rate_hz, channels):
         # each test maps its own reference: the controlled quantity differs by test
         if t["control"] == "acceleration":
             ref = f'ref_acceleration_m_s2 = {{ column = "REF", scale = {G} }}'
+            if ref_both:
+                ref += f', ref_displacement_m = {{ column = "REF_D", scale = {MM_PER_V / 1000.0} }}'
         else:
             ref = f'ref_displacement_m = {{ column = "REF", scale = {MM_PER_V / 1000.0} }}'
         lines.append(f"columns = {{ {ref} }}")
@@ -111,6 +116,8 @@ def main():
     ap.add_argument("--channels", default="displacement,acceleration")
     ap.add_argument("--random-duration", default="30")
     ap.add_argument("--identify-only", action="store_true")
+    ap.add_argument("--ref-both", action="store_true",
+                    help="acceleration-controlled tests record their displacement reference too")
     args = ap.parse_args()
     synth = args.out_dir + ".synth"
     cmd = ["campaign", "synth", "--quiet", "--force", "--seed", str(args.seed)]
@@ -121,7 +128,7 @@ def main():
     for e in args.effect:
         cmd += ["--effect", e]
     run(cmd + [synth])
-    lab_campaign(synth, args.out_dir, args.rate, args.channels.split(","))
+    lab_campaign(synth, args.out_dir, args.rate, args.channels.split(","), args.ref_both)
     run(["campaign", "check", args.out_dir])
     j_id = os.path.join(args.out_dir, "..", os.path.basename(args.out_dir) + ".id.json")
     t_id = run(["identify", args.out_dir, "--json", j_id, "--force"])

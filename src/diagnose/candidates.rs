@@ -2,7 +2,7 @@
 //! refined parameters free, and its held-out scores.
 
 use super::baseline::{
-    candidate_range, copy_baseline, residual_vector, spool_recorded, valve_dynamics,
+    candidate_range, copy_baseline, from_motion, residual_vector, spool_recorded, valve_dynamics,
     BaselineParameter, Range, REFINED,
 };
 use super::effect::Effect;
@@ -110,7 +110,11 @@ pub(super) fn fit_candidate(
         .into_iter()
         .filter(|i| fit_idx.contains(i))
         .collect();
-    let sig = if sig.is_empty() {
+    // a resonance moves a baseline fitted to the motion far (the identified mass holds a
+    // specimen's, the oil column a foundation's): it is refitted on every test
+    // ([`from_motion`]); the other effects perturb it locally and keep their signature's
+    let moves_far = e.valley_frequency().is_some() && from_motion(c);
+    let sig = if sig.is_empty() || moves_far {
         fit_idx.to_vec()
     } else {
         sig

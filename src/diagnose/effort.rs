@@ -20,6 +20,13 @@ pub enum Effort {
 /// never converges, and 8 bring a clean campaign's to its noise floor.
 const BASELINE_ITERATIONS: usize = 8;
 
+/// The same for a baseline fitted to the motion ([`super::baseline::from_motion`]): the
+/// closed-loop fit ran on excerpts and its estimation tests, and its parameters move far
+/// on every test's fitting half (a clean 1-kHz campaign's cost fell 1600-fold from 8 to
+/// 40 iterations); a baseline stopped short leaves its gain to whichever candidate
+/// refines it further.
+const MOTION_BASELINE_ITERATIONS: usize = 40;
+
 /// The least-squares settings of the candidates' fits: 12 iterations bring an effect's
 /// parameters from an informed start to its valley; the tolerances are relative.
 const CANDIDATE_LSQ: LsqOptions = LsqOptions {
@@ -51,8 +58,12 @@ impl Effort {
     /// same for both efforts, as a baseline stopped short of its noise floor leaves cells
     /// "missed" that a candidate then absorbs (3 iterations left a clean campaign's force
     /// at 1.5 floor RMS, and stick-slip was named).
-    pub(super) fn baseline_iterations(self) -> usize {
-        BASELINE_ITERATIONS
+    pub(super) fn baseline_iterations(self, from_motion: bool) -> usize {
+        if from_motion {
+            MOTION_BASELINE_ITERATIONS
+        } else {
+            BASELINE_ITERATIONS
+        }
     }
 
     /// The least-squares settings of each candidate's fit stages.

@@ -4,7 +4,8 @@
 //!
 //! Method:
 //! 1. Baseline from [`crate::identify`] (structure from the data: valve order from the
-//!    valve FRF, actuator variant by output error), refined by output-error least squares
+//!    valve FRF, or from the closed-loop fit's criterion without a spool channel,
+//!    actuator variant by output error), refined by output-error least squares
 //!    on the fitting halves: the valve on the spool channel alone (blind to the flow
 //!    effects), then mass, bulk modulus, leakage and friction amplitude on every channel.
 //! 2. Noise from the data ([`residuals::estimate_noise`]): the floor from the rest
@@ -15,7 +16,9 @@
 //!    noise drives (stick-slip chatter) is judged on the spread it predicts, not on a
 //!    phase it cannot know.
 //! 4. Each catalogue effect fitted over the fitting halves of the tests where its
-//!    signature lives, with the baseline's refined parameters free, from physically
+//!    signature lives (of every test when the baseline came from the closed-loop fit of
+//!    the motion: [`baseline::from_motion`]), with the baseline's refined parameters
+//!    free, from physically
 //!    informed starts (FRF fits for specimen and foundation, the velocity plateau for flow
 //!    saturation, small grids for the deadband) by output-error least squares; stick-slip
 //!    from the friction-velocity curve of the slow tests ([`stribeck`]), polished on the
@@ -33,6 +36,9 @@
 //! 6. The gain and `explained` on the report quarter only, which no fit and no decision
 //!    saw ([`Part`]); `explained` when every report cell the baseline missed is within
 //!    [`EXPLAINED_RATIO`]; otherwise the cells still missed are located ([`locate`]).
+//! 7. Without a force channel and no specimen named, the lightest specimen per
+//!    frequency the records would have shown ([`visibility`]): a stiff displacement loop
+//!    can hide a heavy one from the table's motion, and then `none` is no evidence.
 
 mod baseline;
 mod candidates;
@@ -53,6 +59,7 @@ mod specimen_modes;
 mod starts;
 mod stick_slip;
 pub mod stribeck;
+mod visibility;
 
 pub use effect::{Effect, EFFECTS};
 pub use effort::Effort;

@@ -5,6 +5,7 @@ use super::effort::Effort;
 use super::evidence::EVIDENCE_SIGMAS;
 use super::residuals::{Cells, NoiseFloor, SCORE_WINDOW};
 use super::specimen_modes::parameters_json;
+use super::visibility::Visibility;
 use super::{EXPLAINED_RATIO, MISS_RATIO, REQUIRED_GAIN};
 use crate::identify::Identification;
 use crate::params::{ActuatorModel, Params, ServovalveModel};
@@ -142,6 +143,9 @@ pub struct Diagnosis {
     pub partial: Vec<Partial>,
     /// Effects the recorded channels cannot show, with why (never reported as absent).
     pub not_testable: Vec<String>,
+    /// Without a force channel and no specimen named: the lightest specimen the records
+    /// would have shown, per frequency ([`super::visibility`]).
+    pub specimen_visibility: Option<Visibility>,
     /// Why the best candidate was not taken as the cause though it scored (unphysical).
     pub cause_rejected: Option<String>,
     /// No report cell the baseline missed is still missed ([`super::EXPLAINED_RATIO`]).
@@ -201,6 +205,31 @@ impl Diagnosis {
         )
     }
 
+    /// What the records could not show of a specimen, in a sentence (`None` when
+    /// [`Diagnosis::specimen_visibility`] was not computed).
+    pub fn visibility_text(&self) -> Option<String> {
+        let v = self.specimen_visibility.as_ref()?;
+        let tonnes = |m: f64| format!("{:.3} t", m / 1000.0);
+        let each: Vec<String> = v
+            .specimens
+            .iter()
+            .map(|s| match s.smallest_visible_mass_kg {
+                Some(m) => format!("{} at {} Hz", tonnes(m), s.frequency_hz),
+                None => format!(
+                    "none up to {} at {} Hz",
+                    tonnes(s.largest_probed_mass_kg),
+                    s.frequency_hz
+                ),
+            })
+            .collect();
+        Some(format!(
+            "No force channel: a specimen shows only through the recorded motion of {}, and the lightest these records would show (damping {}) is {}. A lighter specimen may be on the table unseen",
+            v.tests.join(", "),
+            v.specimens.first().map_or(0.0, |s| s.damping_ratio),
+            each.join(", ")
+        ))
+    }
+
     /// The JSON of issue 6 (fixed keys), with issue 17's `causes`, `partial` and
     /// `unexplained`.
     pub fn to_json(&self) -> serde_json::Value {
@@ -251,6 +280,7 @@ impl Diagnosis {
                 "why_not_a_cause": c.why_not_a_cause,
             })).collect::<Vec<_>>(),
             "not_testable": self.not_testable,
+            "specimen_visibility": self.specimen_visibility,
             "gain": self.gain,
             "explained": self.explained,
             "unexplained": self.unexplained,

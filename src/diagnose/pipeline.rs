@@ -3,7 +3,7 @@
 //! of the fitting halves, the table the bounds scale to, and the report quarter's missed
 //! cells; then searches for causes, one effect at a time, until none passes.
 
-use super::baseline::refine_output_error;
+use super::baseline::{from_motion, refine_output_error};
 use super::candidates::{fit_candidate, heldout_scores, scored_candidate, Fitted, Hold};
 use super::effect::{Effect, EFFECTS};
 use super::effort::Effort;
@@ -100,7 +100,7 @@ impl Diagnoser<'_> {
             &self.table,
             &self.tests,
             &self.whitening,
-            self.effort.baseline_iterations(),
+            self.effort.baseline_iterations(from_motion(self.c)),
         );
         match refined {
             Some(r) => {

@@ -131,9 +131,6 @@ fn check_moved(
 pub enum Scope {
     /// The parameters and their estimates only, what the diagnosis needs: no device fit,
     /// and no comparison of the model with every test unless the closed-loop fit made one.
-    /// A closed-loop fit with the valve free (no spool) keeps the first-order valve here
-    /// ([`greybox::ValveOrderChoice::FirstOrder`]), so its parameters may differ from
-    /// [`Scope::Complete`]'s, which lets the data choose the order.
     Parameters,
     /// Also the device force fit ([`Identification::device`]) and the identified model
     /// simulated against every test ([`Identification::comparison`]): the `identify`
@@ -325,8 +322,8 @@ pub fn identify_screened_with(s: &Screening, scope: Scope) -> Identification {
         oil_column: oil.is_some(),
         friction: friction.is_some(),
     };
-    let closed_loop = closed_loop(c, &p, known, &unknown_inputs, scope)
-        .and_then(|r| r.map_err(|e| note(Err(e))).ok());
+    let closed_loop =
+        closed_loop(c, &p, known, &unknown_inputs).and_then(|r| r.map_err(|e| note(Err(e))).ok());
     if let Some(cl) = &closed_loop {
         p = cl.params;
     }
@@ -387,32 +384,20 @@ fn motion_tests(c: &Campaign) -> Vec<usize> {
 }
 
 /// The grey-box fit of the closed loop when something the simulation needs is neither
-/// given nor identified (`None` when the section-4 chain gave everything). The `identify`
-/// command lets the data choose the valve's order; the diagnosis keeps the first-order
-/// valve (see [`greybox::ValveOrderChoice`]).
+/// given nor identified (`None` when the section-4 chain gave everything); a free valve's
+/// order is the data's, for the `identify` command and the diagnosis alike.
 fn closed_loop(
     c: &Campaign,
     p: &Params,
     known: greybox::Known,
     unknown_inputs: &[&'static str],
-    scope: Scope,
 ) -> Option<Result<greybox::ClosedLoopFit, IdentifyError>> {
     let complete = known.servovalve && known.mass && known.oil_column && known.friction;
     let gains_known = !unknown_inputs.iter().any(|k| k.starts_with("controller."));
     if complete && gains_known {
         return None;
     }
-    let valve = match scope {
-        Scope::Complete => greybox::ValveOrderChoice::ByData,
-        Scope::Parameters => greybox::ValveOrderChoice::FirstOrder,
-    };
-    Some(greybox::fit_closed_loop(
-        c,
-        &motion_tests(c),
-        p,
-        known,
-        valve,
-    ))
+    Some(greybox::fit_closed_loop(c, &motion_tests(c), p, known))
 }
 
 /// The identified model against every test with a measured motion (the section-4
@@ -578,9 +563,7 @@ mod tests {
     use crate::campaign::synth::{synthesise, SynthOptions};
 
     /// The diagnosis's identification ([`Scope::Parameters`]) identifies the same model as
-    /// the complete one (section 4 gives the valve from the spool here; without it the two
-    /// scopes' valve orders may differ) and leaves out the device fit, which only the
-    /// latter attempts.
+    /// the complete one and leaves out the device fit, which only the latter attempts.
     #[test]
     fn the_parameters_scope_identifies_the_same_model_without_the_device() {
         let opts = SynthOptions {

@@ -49,8 +49,8 @@ pub(super) fn write_causes(html: &mut String, md: &mut String, d: &Diagnosis) {
         }
         html.push_str("</table>");
     }
-    for why in &d.not_testable {
-        let _ = write!(html, "<p>{}.</p>", escape_html(why));
+    for why in d.not_testable.iter().cloned().chain(d.visibility_text()) {
+        let _ = write!(html, "<p>{}.</p>", escape_html(&why));
         let _ = writeln!(md, "\n{why}.");
     }
     for p in &d.partial {

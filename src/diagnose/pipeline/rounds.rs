@@ -4,14 +4,16 @@
 use super::{verdict, Current, Diagnoser, Verdict};
 use super::{MAX_CAUSES, PROGRESS_SETUP, SEARCH_STEPS};
 use crate::campaign::{Campaign, Record};
+use crate::diagnose::baseline::force_recorded;
 use crate::diagnose::candidates::heldout_scores;
-use crate::diagnose::effect::EFFECTS;
+use crate::diagnose::effect::{Effect, EFFECTS};
 use crate::diagnose::effort::Effort;
 use crate::diagnose::locate::unexplained_cells;
 use crate::diagnose::missed::Missed;
 use crate::diagnose::output::{Candidate, Cause, Diagnosis, Partial};
 use crate::diagnose::part::Part;
 use crate::diagnose::residuals::{estimate_noise, Whitening};
+use crate::diagnose::visibility::specimen_visibility;
 use crate::diagnose::{unphysical, Progress};
 use crate::identify::spool::refine_servovalve;
 use crate::identify::Identification;
@@ -78,6 +80,14 @@ pub(in crate::diagnose) fn diagnose_with(
             &d.noise,
         )
     };
+    let specimen_visibility = (!force_recorded(c)
+        && d.testable.contains(&Effect::Specimen)
+        && !found
+            .causes
+            .iter()
+            .any(|k| k.effect.specimen_modes().is_some()))
+    .then(|| specimen_visibility(&extended, c, &d.whitening))
+    .flatten();
     Diagnosis {
         baseline: base,
         baseline_rows,
@@ -89,6 +99,7 @@ pub(in crate::diagnose) fn diagnose_with(
         causes: found.causes,
         partial: found.partial,
         not_testable,
+        specimen_visibility,
         cause_rejected: found.cause_rejected,
         explained,
         gain: baseline_heldout / extended_heldout,

@@ -126,6 +126,41 @@ impl Whitening {
     }
 }
 
+impl Whitening {
+    /// Per channel of test `i`, the squared sum of the weighted DCT coefficients of the
+    /// difference `a - b` of two runs through the whitening's part: the mean over octave
+    /// bands of the difference's power over the power a model predicts there (a
+    /// difference of 1 is as large as the noise). `None` for channels not weighed.
+    pub fn difference(
+        &self,
+        c: &Campaign,
+        i: usize,
+        a: &[Outputs],
+        b: &[Outputs],
+    ) -> PerChannel<Option<f64>> {
+        let mut out = PerChannel::filled(None);
+        let (Some(part), Some(w)) = (self.part, self.weights.get(i)) else {
+            return out;
+        };
+        let range = part.range(c.records[i].len());
+        if range.end > a.len().min(b.len()) {
+            return out;
+        }
+        for (ch, wc) in w.iter() {
+            if wc.is_empty() {
+                continue;
+            }
+            let x: Vec<f64> = range
+                .clone()
+                .map(|k| ch.simulated(&a[k]) - ch.simulated(&b[k]))
+                .collect();
+            let d = dct_first(&x, wc.len());
+            out[ch] = Some(d.iter().zip(wc).map(|(v, w)| (v * w).powi(2)).sum());
+        }
+        out
+    }
+}
+
 /// Variance of the noise a prediction does not hold in channel `ch`, whose noise floor is
 /// `floor`: the spool's (never fed back) and a tiny floor for the others (the command is
 /// recorded without noise; the sensors' noise is in the prediction).

@@ -107,29 +107,15 @@ struct Target {
     weight: f64,
 }
 
-/// How the order of a free valve (no spool recorded) is set.
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
-pub enum ValveOrderChoice {
-    /// The first-order valve (paper eq. 4.1), one time constant free. The diagnosis'
-    /// baseline: a second-order valve fitted before the effects are in the model takes up
-    /// part of an unmodelled specimen's dynamics (a 20-t specimen at 6 Hz bent it to
-    /// 26 Hz and damping 2.0 for 20.5 Hz and 1.05), and the diagnosis then named a
-    /// foundation for the specimen.
-    FirstOrder,
-    /// First- or second-order as the data choose ([`ValveOrder`]): the `identify` command.
-    ByData,
-}
-
 /// Fit the closed loop of `c` on its usable `tests` (those with a reference and the
 /// displacement or acceleration), from `p` (the campaign's keys and the section-4
-/// estimates applied) with what `known` says is already identified, and a free valve's
-/// order set by `valve`.
+/// estimates applied) with what `known` says is already identified; a free valve's order
+/// is the data's ([`ValveOrder`]).
 pub fn fit_closed_loop(
     c: &Campaign,
     tests: &[usize],
     p: &Params,
     known: Known,
-    valve: ValveOrderChoice,
 ) -> Result<ClosedLoopFit, IdentifyError> {
     let (estimation, validation) = split::split(c, tests);
     if estimation.is_empty() {
@@ -168,10 +154,7 @@ pub fn fit_closed_loop(
             "closed loop not identified: the fit's simulation left the operating envelope",
         )
     })?;
-    let (s, q, fit, valve_order) = match valve {
-        ValveOrderChoice::ByData => valve_order(c, &full, s, q, fit),
-        ValveOrderChoice::FirstOrder => (s, q, fit, None),
-    };
+    let (s, q, fit, valve_order) = valve_order(c, &full, s, q, fit);
     let mut out = finish(c, &s, &q, &fit, &full, estimation, validation, starts.len());
     out.valve_order = valve_order;
     Ok(out)
