@@ -145,6 +145,8 @@ fn a_specimen_is_found_without_the_valve_channels() {
     assert!((f / 6.0 - 1.0).abs() < 0.05, "frequency {f}");
     assert!((m / 20_000.0 - 1.0).abs() < 0.15, "mass {m}");
     assert!(d["gain"].as_f64().unwrap() >= 1.5, "gain {}", d["gain"]);
+    // the force was recorded (and a specimen named): no visibility bound is due
+    assert!(d["specimen_visibility"].is_null());
 }
 
 /// A clean table recorded by its displacement alone, gains and geometry unknown: the
@@ -168,6 +170,8 @@ fn displacement_alone_names_what_it_cannot_test() {
         d["cause"], d["explained"], d["not_testable"]
     );
     assert_eq!(d["cause"], "none", "{}", d["causes"]);
+    // without the acceleration a specimen is not testable at all: no visibility bound
+    assert!(d["specimen_visibility"].is_null());
     let not_testable: Vec<&str> = d["not_testable"]
         .as_array()
         .unwrap()

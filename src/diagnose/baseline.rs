@@ -153,12 +153,14 @@ pub(super) fn copy_baseline(from: &Params, to: &mut Params) {
 pub(super) const REFINED: [BaselineParameter; 5] =
     [TableMass, BulkModulus, Leakage, FrictionForce, FlowGain];
 
-/// Refined for the baseline only: the Bouc-Wen yield displacement and shape (eq. 4.15),
+/// Refined for the baseline only, and only with a force channel (see
+/// [`refine_output_error`]): the Bouc-Wen yield displacement and shape (eq. 4.15),
 /// whose section-4 estimates (a few percent off) leave the random tests' force about 1.5
 /// floor RMS off in the low octaves. Candidates keep the baseline's values.
 pub(super) const REFINED_FRICTION: [BaselineParameter; 2] = [YieldDisplacement, FrictionShape];
 
-/// Refined for the baseline and the polish only: the table's centring stiffness, which
+/// Refined for the baseline and the polish only, and only with a force channel (see
+/// [`refine_output_error`]): the table's centring stiffness, which
 /// section 4 reads off the triangles' force (eqs. 4.9-4.10) where a missing effect's force
 /// bends it (1.6 kN/m for a 15-t specimen at 5 Hz where the table has none, seed 101:
 /// after the specimen was found, the triangles' force stayed 3-10 floor RMS off below
@@ -249,11 +251,15 @@ pub(super) fn spool_recorded(c: &Campaign) -> bool {
 /// Whether the table's parameters ([`REFINED`]) come from the closed-loop fit of the
 /// recorded motion, not from section 4: no test recorded the force (the mass and the oil
 /// column then enter only through the motion's combinations), or the campaign leaves
-/// geometry or controller gains unknown (the flow gain then stands for the loop gain).
+/// controller gains unknown (the closed-loop fit then frees the loop gain; `identify`
+/// runs it on that condition, not on unknown geometry, which section 4 does not need).
 /// They are not known to the paper's precisions then, and the conventions the fit holds
-/// them to (a mass, a piston area) are scales, not estimates.
+/// them to (a mass, a piston area) are scales, not estimates. Read off the campaign, not
+/// the identification: a section-4 estimator that failed on complete channels leaves its
+/// parameter to the closed-loop fit too, and is refined narrowly (a known limit).
 pub(super) fn table_from_motion(c: &Campaign) -> bool {
-    !force_recorded(c) || !c.info.apply_known(&mut Params::trees_lab()).is_empty()
+    let unknown = c.info.apply_known(&mut Params::trees_lab());
+    !force_recorded(c) || unknown.iter().any(|k| k.starts_with("controller."))
 }
 
 /// Whether some test of `c` recorded the force.
@@ -328,14 +334,14 @@ pub(super) fn refine_output_error(
     // without a force channel the friction's yield and shape, and a centring spring, are
     // not separable in the motion from the friction amplitude and the oil column (the
     // closed-loop fit keeps them): freed, they leave the fit crawling along those valleys
-    let pinned_by_force: &[BaselineParameter] = if force_recorded(c) {
+    let freed_with_force: &[BaselineParameter] = if force_recorded(c) {
         &[REFINED_FRICTION[0], REFINED_FRICTION[1], REFINED_SPRING[0]]
     } else {
         &[]
     };
     let free: Vec<BaselineParameter> = REFINED
         .iter()
-        .chain(pinned_by_force)
+        .chain(freed_with_force)
         .chain(valve_dynamics(p0))
         .copied()
         .collect();

@@ -209,21 +209,24 @@ impl Diagnosis {
     /// [`Diagnosis::specimen_visibility`] was not computed).
     pub fn visibility_text(&self) -> Option<String> {
         let v = self.specimen_visibility.as_ref()?;
-        let tonnes = |m: f64| format!("{:.3} t", m / 1000.0);
+        let share = |m: f64| format!("{:.3} t ({:.1} %)", m / 1000.0, 100.0 * m / v.table_mass_kg);
         let each: Vec<String> = v
             .specimens
             .iter()
             .map(|s| match s.smallest_visible_mass_kg {
-                Some(m) => format!("{} at {} Hz", tonnes(m), s.frequency_hz),
+                Some(m) if s.at_lightest_probed => {
+                    format!("at most {} at {} Hz", share(m), s.frequency_hz)
+                }
+                Some(m) => format!("{} at {} Hz", share(m), s.frequency_hz),
                 None => format!(
-                    "none up to {} at {} Hz",
-                    tonnes(s.largest_probed_mass_kg),
+                    "more than {} at {} Hz",
+                    share(s.probed_mass_kg[1]),
                     s.frequency_hz
                 ),
             })
             .collect();
         Some(format!(
-            "No force channel: a specimen shows only through the recorded motion of {}, and the lightest these records would show (damping {}) is {}. A lighter specimen may be on the table unseen",
+            "No force channel: a specimen shows only through the recorded motion. Probed on {}, a specimen (damping {}) must weigh at least {} to change these records beyond their noise (percent of the model's table mass, itself a convention without a force channel); a lighter one may be on the table unseen",
             v.tests.join(", "),
             v.specimens.first().map_or(0.0, |s| s.damping_ratio),
             each.join(", ")

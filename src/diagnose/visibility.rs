@@ -29,26 +29,38 @@ pub const PROBE_DAMPING_RATIO: f64 = 0.03;
 /// sets the threshold.
 const BISECTIONS: usize = 7;
 
-/// The lightest visible specimen at one frequency.
+/// The lightest visible specimen at one frequency. Without a force channel the model's
+/// table mass is a convention (the motion sees only ratios of mass to stiffness), and a
+/// specimen acts through its share of it: the share is the figure that carries over to
+/// the real table; the mass in kilograms holds on the model's scale.
 #[derive(Debug, Clone, PartialEq, Serialize)]
 pub struct SpecimenVisibility {
     pub frequency_hz: f64,
     pub damping_ratio: f64,
-    /// `None` when even the heaviest specimen of the fitting range stays invisible.
+    /// `None` when even the heaviest specimen probed stays invisible.
     pub smallest_visible_mass_kg: Option<f64>,
-    /// The heaviest specimen probed (the fitting range's top), kg.
-    pub largest_probed_mass_kg: f64,
+    /// The same over the model's table mass.
+    pub smallest_visible_mass_ratio: Option<f64>,
+    /// The smallest visible mass is the lightest probed: the threshold may lie below.
+    pub at_lightest_probed: bool,
+    /// The lightest and heaviest specimens probed (the fitting range), kg.
+    pub probed_mass_kg: [f64; 2],
 }
 
 /// What the records could show of a specimen, and on which tests.
 #[derive(Debug, Clone, PartialEq, Serialize)]
 pub struct Visibility {
+    /// The specimen's signature tests, the ones probed (a specimen acts on every test).
     pub tests: Vec<String>,
+    pub table_mass_kg: f64,
     pub specimens: Vec<SpecimenVisibility>,
-    pub rule: &'static str,
+    pub rule: String,
 }
 
-const RULE: &str = "a specimen (damping 0.03) is visible when adding it to the extended model changes some test and channel of the specimen's signature tests, over their fitting halves, by enough that a model lacking it would miss that cell: difference power over predicted noise power, averaged over octave bands, at least MISS_RATIO^2 - 1";
+/// How visibility is judged, for the JSON.
+fn rule() -> String {
+    format!("a specimen (damping {PROBE_DAMPING_RATIO}) is visible when adding it to the extended model, the rest of the model held, changes some test and channel of the specimen's signature tests over their fitting halves by enough that a model lacking it would miss that cell: difference power over predicted noise power, averaged over octave bands, at least {:.4} ({MISS_RATIO}^2 - 1). A refit of the rest of the model can absorb part of a specimen, so a specimen must weigh at least this to change the records; whether a fit would then name it is not promised", MISS_RATIO * MISS_RATIO - 1.0)
+}
 
 /// The specimens the records of `c` could and could not show under the extended model `p`
 /// (the diagnosis' whitening weighs the channels); `None` when no signature test of the
@@ -68,7 +80,8 @@ pub fn specimen_visibility(p: &Params, c: &Campaign, whitening: &Whitening) -> O
     };
     let without = runs(p).filter(|r| !r.is_empty())?;
     let (lo, hi) = effect.bounds(p);
-    let (m_lo, m_hi) = (lo[0].max(f64::MIN_POSITIVE), hi[0]);
+    let (m_lo, m_hi) = (lo[0], hi[0]);
+    let table = p.table.mass_kg;
     let threshold = MISS_RATIO * MISS_RATIO - 1.0;
     let visible = |f: f64, m: f64| -> bool {
         let mut q = *p;
@@ -86,11 +99,16 @@ pub fn specimen_visibility(p: &Params, c: &Campaign, whitening: &Whitening) -> O
     };
     let specimens = PROBE_FREQUENCIES_HZ
         .iter()
-        .map(|&f| SpecimenVisibility {
-            frequency_hz: f,
-            damping_ratio: PROBE_DAMPING_RATIO,
-            smallest_visible_mass_kg: smallest_visible(|m| visible(f, m), m_lo, m_hi),
-            largest_probed_mass_kg: m_hi,
+        .map(|&f| {
+            let m = smallest_visible(|m| visible(f, m), m_lo, m_hi);
+            SpecimenVisibility {
+                frequency_hz: f,
+                damping_ratio: PROBE_DAMPING_RATIO,
+                smallest_visible_mass_kg: m,
+                smallest_visible_mass_ratio: m.map(|m| m / table),
+                at_lightest_probed: m == Some(m_lo),
+                probed_mass_kg: [m_lo, m_hi],
+            }
         })
         .collect();
     Some(Visibility {
@@ -99,14 +117,16 @@ pub fn specimen_visibility(p: &Params, c: &Campaign, whitening: &Whitening) -> O
             .map(|&i| c.info.tests[i].name.clone())
             .collect(),
         specimens,
-        rule: RULE,
+        table_mass_kg: table,
+        rule: rule(),
     })
 }
 
 /// The smallest `m` in `[lo, hi]` with `visible(m)`, by bisection in `ln m` (visibility
-/// grows with the mass); `None` when `hi` is not visible, `lo` when it is.
+/// grows with the mass); `None` when `hi` is not visible or the interval is not a finite
+/// positive one, `lo` when it is visible.
 fn smallest_visible(visible: impl Fn(f64) -> bool, lo: f64, hi: f64) -> Option<f64> {
-    if !(lo > 0.0 && hi >= lo && visible(hi)) {
+    if !(lo > 0.0 && hi.is_finite() && hi >= lo && visible(hi)) {
         return None;
     }
     if visible(lo) {
