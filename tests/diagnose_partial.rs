@@ -145,8 +145,18 @@ fn a_specimen_is_found_without_the_valve_channels() {
     assert!((f / 6.0 - 1.0).abs() < 0.05, "frequency {f}");
     assert!((m / 20_000.0 - 1.0).abs() < 0.15, "mass {m}");
     assert!(d["gain"].as_f64().unwrap() >= 1.5, "gain {}", d["gain"]);
-    // the force was recorded (and a specimen named): no visibility bound is due
+    // the force was recorded (and a specimen named): no visibility bound is due, and the
+    // table mass, hence the specimen's, is measured, not a convention
     assert!(d["specimen_visibility"].is_null());
+    assert_eq!(d["mass_scale"]["convention"], false);
+    let ratio = d["causes"][0]["mass_ratios"]["mass_ratio"]
+        .as_f64()
+        .unwrap();
+    let table = d["mass_scale"]["table_mass_kg"].as_f64().unwrap();
+    assert!(
+        (ratio * table / m - 1.0).abs() < 1e-9,
+        "{ratio} {table} {m}"
+    );
 }
 
 /// A clean table recorded by its displacement alone, gains and geometry unknown: the

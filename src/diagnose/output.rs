@@ -205,6 +205,55 @@ impl Diagnosis {
         )
     }
 
+    /// Whether the model's table mass is a convention (no force channel: the closed-loop
+    /// fit held it as the scale of the motion's combinations), so that every mass the
+    /// diagnosis names is on that scale and only its ratio to the table mass is measured.
+    pub fn mass_is_convention(&self) -> bool {
+        self.identification
+            .closed_loop
+            .as_ref()
+            .is_some_and(|f| f.conventions.iter().any(|k| k.key == "table.mass_kg"))
+    }
+
+    /// Each `*mass_kg` parameter of `parameters` over the extended model's table mass.
+    pub fn mass_ratios(&self, parameters: &BTreeMap<String, f64>) -> BTreeMap<String, f64> {
+        parameters
+            .iter()
+            .filter(|(k, _)| k.ends_with("mass_kg"))
+            .map(|(k, m)| {
+                (
+                    k.replace("mass_kg", "mass_ratio"),
+                    m / self.extended.table.mass_kg,
+                )
+            })
+            .collect()
+    }
+
+    /// Without a force channel, a sentence saying the named masses are on a conventional
+    /// scale and giving their ratios (`None` when the table mass was measured or no cause
+    /// has a mass).
+    pub fn mass_scale_text(&self) -> Option<String> {
+        if !self.mass_is_convention() {
+            return None;
+        }
+        let ratios: Vec<String> = self
+            .causes
+            .iter()
+            .flat_map(|c| {
+                self.mass_ratios(&c.parameters)
+                    .into_iter()
+                    .map(move |(k, r)| format!("{} {k} {r:.3}", c.effect.name()))
+            })
+            .collect();
+        (!ratios.is_empty()).then(|| {
+            format!(
+                "No force channel: the table mass is a convention ({:.3} t in the extended model) and the masses above are on its scale; the records measure their ratios to it: {}",
+                self.extended.table.mass_kg / 1000.0,
+                ratios.join(", ")
+            )
+        })
+    }
+
     /// What the records could not show of a specimen, in a sentence (`None` when
     /// [`Diagnosis::specimen_visibility`] was not computed).
     pub fn visibility_text(&self) -> Option<String> {
@@ -275,7 +324,13 @@ impl Diagnosis {
                 "parameters": keyed(c.effect, &c.parameters),
                 "sigma": c.sigma,
                 "gain": c.gain,
+                "mass_ratios": self.mass_ratios(&c.parameters),
             })).collect::<Vec<_>>(),
+            "mass_scale": {
+                "table_mass_kg": self.extended.table.mass_kg,
+                "convention": self.mass_is_convention(),
+                "rule": "without a force channel the table mass is held at a conventional value (the closed-loop fit's scale) and every mass named is on its scale: only the ratios (mass_ratios: mass over the extended model's table mass) are measured",
+            },
             "partial": self.partial.iter().map(|c| json!({
                 "effect": c.effect.name(),
                 "parameters": keyed(c.effect, &c.parameters),

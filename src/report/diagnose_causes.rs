@@ -49,7 +49,8 @@ pub(super) fn write_causes(html: &mut String, md: &mut String, d: &Diagnosis) {
         }
         html.push_str("</table>");
     }
-    for why in d.not_testable.iter().cloned().chain(d.visibility_text()) {
+    let notes = d.mass_scale_text().into_iter().chain(d.visibility_text());
+    for why in d.not_testable.iter().cloned().chain(notes) {
         let _ = write!(html, "<p>{}.</p>", escape_html(&why));
         let _ = writeln!(md, "\n{why}.");
     }

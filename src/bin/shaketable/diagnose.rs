@@ -152,6 +152,9 @@ pub fn run(args: Args) -> anyhow::Result<()> {
     for why in &d.not_testable {
         println!("{why}");
     }
+    if let Some(v) = d.mass_scale_text() {
+        println!("{v}.");
+    }
     if let Some(v) = d.visibility_text() {
         println!("{v}.");
     }
