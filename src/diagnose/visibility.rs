@@ -29,6 +29,11 @@ pub const PROBE_DAMPING_RATIO: f64 = 0.03;
 /// sets the threshold.
 const BISECTIONS: usize = 7;
 
+/// A probe specimen is visible when it changes some cell by this much (difference power
+/// over predicted noise power, [`Whitening::difference`]): the measured residual of a
+/// model lacking it would then exceed [`MISS_RATIO`] noise RMS, and the cell be missed.
+const VISIBLE_DIFFERENCE: f64 = MISS_RATIO * MISS_RATIO - 1.0;
+
 /// The lightest visible specimen at one frequency. Without a force channel the model's
 /// table mass is a convention (the motion sees only ratios of mass to stiffness), and a
 /// specimen acts through its share of it: the share is the figure that carries over to
@@ -59,7 +64,7 @@ pub struct Visibility {
 
 /// How visibility is judged, for the JSON.
 fn rule() -> String {
-    format!("a specimen (damping {PROBE_DAMPING_RATIO}) is visible when adding it to the extended model, the rest of the model held, changes some test and channel of the specimen's signature tests over their fitting halves by enough that a model lacking it would miss that cell: difference power over predicted noise power, averaged over octave bands, at least {:.4} ({MISS_RATIO}^2 - 1). A refit of the rest of the model can absorb part of a specimen, so a specimen must weigh at least this to change the records; whether a fit would then name it is not promised", MISS_RATIO * MISS_RATIO - 1.0)
+    format!("a specimen (damping {PROBE_DAMPING_RATIO}) is visible when adding it to the extended model, the rest of the model held, changes some test and channel of the specimen's signature tests over their fitting halves by enough that a model lacking it would miss that cell: difference power over predicted noise power, averaged over octave bands, at least {VISIBLE_DIFFERENCE:.4} ({MISS_RATIO}^2 - 1). A refit of the rest of the model can absorb part of a specimen, so a specimen must weigh at least this to change the records; whether a fit would then name it is not promised")
 }
 
 /// The specimens the records of `c` could and could not show under the extended model `p`
@@ -82,7 +87,6 @@ pub fn specimen_visibility(p: &Params, c: &Campaign, whitening: &Whitening) -> O
     let (lo, hi) = effect.bounds(p);
     let (m_lo, m_hi) = (lo[0], hi[0]);
     let table = p.table.mass_kg;
-    let threshold = MISS_RATIO * MISS_RATIO - 1.0;
     let visible = |f: f64, m: f64| -> bool {
         let mut q = *p;
         effect.apply(&mut q, &[m, f, PROBE_DAMPING_RATIO]);
@@ -94,7 +98,7 @@ pub fn specimen_visibility(p: &Params, c: &Campaign, whitening: &Whitening) -> O
             whitening
                 .difference(c, i, &with[k], &without[k])
                 .values()
-                .any(|d| d.is_some_and(|d| d >= threshold))
+                .any(|d| d.is_some_and(|d| d >= VISIBLE_DIFFERENCE))
         })
     };
     let specimens = PROBE_FREQUENCIES_HZ

@@ -120,13 +120,10 @@ impl Whitening {
                 .clone()
                 .map(|k| m[k] - ch.simulated(&sim[k]))
                 .collect();
-            let d = dct_first(&x, wc.len());
-            out.extend(d.iter().zip(wc).map(|(v, w)| v * w));
+            out.extend(weighted(&x, wc));
         }
     }
-}
 
-impl Whitening {
     /// Per channel of test `i`, the squared sum of the weighted DCT coefficients of the
     /// difference `a - b` of two runs through the whitening's part: the mean over octave
     /// bands of the difference's power over the power a model predicts there (a
@@ -154,11 +151,19 @@ impl Whitening {
                 .clone()
                 .map(|k| ch.simulated(&a[k]) - ch.simulated(&b[k]))
                 .collect();
-            let d = dct_first(&x, wc.len());
-            out[ch] = Some(d.iter().zip(wc).map(|(v, w)| (v * w).powi(2)).sum());
+            out[ch] = Some(weighted(&x, wc).map(|v| v * v).sum());
         }
         out
     }
+}
+
+/// The DCT coefficients of `x` that `weights` weigh, weighted: what the fits' residual
+/// and [`Whitening::difference`] are made of.
+fn weighted<'a>(x: &[f64], weights: &'a [f64]) -> impl Iterator<Item = f64> + 'a {
+    dct_first(x, weights.len())
+        .into_iter()
+        .zip(weights)
+        .map(|(v, w)| v * w)
 }
 
 /// Variance of the noise a prediction does not hold in channel `ch`, whose noise floor is
