@@ -2,8 +2,8 @@
 //! refined parameters free, and its held-out scores.
 
 use super::baseline::{
-    candidate_range, copy_baseline, from_motion, residual_vector, spool_recorded, valve_dynamics,
-    BaselineParameter, Range, REFINED,
+    candidate_range, copy_baseline, from_motion, refined_for, residual_vector, spool_recorded,
+    valve_dynamics, BaselineParameter, Range,
 };
 use super::effect::Effect;
 use super::effort::Effort;
@@ -79,7 +79,8 @@ const FOUNDATION_SERIES_MARGIN: f64 = 1.5;
 /// parameters the other baseline parameters are taken from.
 pub(super) type Start = (Vec<f64>, Params);
 
-/// The baseline parameters a candidate's fit frees with the effect: [`REFINED`], and the
+/// The baseline parameters a candidate's fit frees with the effect: [`super::baseline::REFINED`] (without
+/// the table mass when it is only a scale: [`super::baseline::mass_is_scale`]), and the
 /// valve's dynamics when no test recorded the spool. Then the valve comes from the
 /// closed-loop fit of the table's motion, which bent it to absorb the missing effect (a
 /// 20-t specimen fitted on the bent valve scored worse than the baseline it extends).
@@ -89,7 +90,7 @@ fn candidate_free(c: &Campaign, base: &Params) -> Vec<BaselineParameter> {
     } else {
         valve_dynamics(base)
     };
-    REFINED.iter().chain(valve).copied().collect()
+    refined_for(c).iter().chain(valve).copied().collect()
 }
 
 #[allow(clippy::too_many_arguments)]
