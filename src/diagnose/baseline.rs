@@ -57,6 +57,8 @@ pub(super) enum BaselineParameter {
     ValveTimeConstant,
     FrictionShape,
     TableStiffness,
+    DisplacementGain,
+    VelocityFeedForward,
     DeltaPGain,
 }
 
@@ -64,7 +66,7 @@ use BaselineParameter::*;
 
 impl BaselineParameter {
     /// Every baseline parameter.
-    pub(super) const ALL: [BaselineParameter; 13] = [
+    pub(super) const ALL: [BaselineParameter; 15] = [
         TableMass,
         BulkModulus,
         Leakage,
@@ -77,6 +79,8 @@ impl BaselineParameter {
         ValveTimeConstant,
         FrictionShape,
         TableStiffness,
+        DisplacementGain,
+        VelocityFeedForward,
         DeltaPGain,
     ];
 
@@ -98,6 +102,8 @@ impl BaselineParameter {
             ValveTimeConstant => p.servovalve.time_constant_s,
             FrictionShape => p.friction.shape,
             TableStiffness => p.table.stiffness_n_m,
+            DisplacementGain => p.controller.kp,
+            VelocityFeedForward => p.controller.fv,
             DeltaPGain => p.controller.kdp,
         }
     }
@@ -116,6 +122,8 @@ impl BaselineParameter {
             ValveTimeConstant => &mut p.servovalve.time_constant_s,
             FrictionShape => &mut p.friction.shape,
             TableStiffness => &mut p.table.stiffness_n_m,
+            DisplacementGain => &mut p.controller.kp,
+            VelocityFeedForward => &mut p.controller.fv,
             DeltaPGain => &mut p.controller.kdp,
         };
         *slot = value;
@@ -125,9 +133,10 @@ impl BaselineParameter {
     /// estimates, which are good to the paper's precisions (mass 3 %, oil column 10 %),
     /// so it may move each by a few of those precisions and no more; an effect the
     /// baseline lacks (e.g. a saturating flow) must not bend it into a different table.
-    /// `None` for the stiffness and the delta-P gain, whose ranges are absolute
-    /// ([`stiffness_range`], [`delta_p_gain_range`]): section 4 may read a table without
-    /// a spring as nearly zero, and an unknown gain starts at zero.
+    /// `None` for the stiffness, the feed-forward and the delta-P gain, whose ranges are
+    /// absolute ([`stiffness_range`], [`gain_range`]): section 4 may read a table without
+    /// a spring as nearly zero, and an unknown gain may start at zero. The displacement
+    /// gain is freed only when unknown, as widely as the table's parameters then.
     fn refinement_width(self) -> Option<f64> {
         match self {
             TableMass => Some(0.15),
@@ -136,7 +145,8 @@ impl BaselineParameter {
             FrictionForce | YieldDisplacement | FrictionShape => Some(0.5),
             FlowGain => Some(0.05),
             ValveGain | ValveFrequency | ValveDamping | ValveTimeConstant => Some(0.1),
-            TableStiffness | DeltaPGain => None,
+            DisplacementGain => Some(CANDIDATE_WIDTH),
+            TableStiffness | VelocityFeedForward | DeltaPGain => None,
         }
     }
 }
@@ -194,13 +204,17 @@ fn stiffness_range(p: &Params) -> Range {
     }
 }
 
-/// Refined for the baseline only, and only when the campaign leaves the delta-P gain
-/// unknown (see [`refine_output_error`]): the closed-loop fit holds it at zero and lets
-/// the leakage damp the oil column, which matches the motion's NRMSE as well (measured:
-/// cost 1.80003 against 1.79996 with the true gain, TREES Lab table at 1 kHz) but not
-/// its upper octaves, where the feedback acts through the valve's lag: there a 45-Hz
-/// foundation was named on a clean table. Candidates keep the baseline's value.
-pub(super) const REFINED_GAIN: [BaselineParameter; 1] = [DeltaPGain];
+/// The controller's gains, refined (for the baseline, the polish and the candidates)
+/// when the campaign leaves them unknown ([`unknown_gains`]): the closed-loop fit then
+/// set them from the motion, with no effect in the model, and bent them for the effect it
+/// lacked (a 12-t specimen at 9 Hz left the displacement-controlled random test 13 noise
+/// RMS off below 1 Hz once it was named, with the gains held). The delta-P gain the fit
+/// holds at zero, letting the leakage damp the oil column, which matches the motion's
+/// NRMSE as well (measured: cost 1.80003 against 1.79996 with the true gain, TREES Lab
+/// table at 1 kHz) but not its upper octaves, where the feedback acts through the
+/// valve's lag: there a 45-Hz foundation was named on a clean table.
+pub(super) const REFINED_GAINS: [BaselineParameter; 3] =
+    [DisplacementGain, VelocityFeedForward, DeltaPGain];
 
 /// Standard gravity, m/s^2: the delta-P gain's range is stated per g of table motion.
 const STANDARD_GRAVITY_M_S2: f64 = 9.80665;
@@ -208,22 +222,40 @@ const STANDARD_GRAVITY_M_S2: f64 = 9.80665;
 /// of table motion, the order of the TREES Lab table's (1.3 %).
 const DELTA_P_GAIN_SCALE: f64 = 0.01;
 
-/// Range of an unknown delta-P gain: from zero to a fully open valve for the force that
-/// accelerates the table's mass at 1 g (75 times the TREES Lab table's gain).
-fn delta_p_gain_range(p: &Params) -> Range {
-    let upper = 1.0 / (p.table.mass_kg * STANDARD_GRAVITY_M_S2);
+/// Range of an unknown feed-forward or delta-P gain, from zero: the feed-forward up to
+/// twice the full one (`A / (Ks Kq)`, the closed-loop fit's bound), the delta-P gain up
+/// to a fully open valve for the force that accelerates the table's mass at 1 g (75 times
+/// the TREES Lab table's gain); never below the value itself.
+fn gain_range(p: &Params, which: BaselineParameter) -> Range {
+    let (upper, scale) = match which {
+        VelocityFeedForward => {
+            let full = p.actuator.piston_area_m2 / (p.actuator.flow_gain_m3_s * p.servovalve.gain);
+            (2.0 * full, full)
+        }
+        _ => {
+            let open = 1.0 / (p.table.mass_kg * STANDARD_GRAVITY_M_S2);
+            (open, open * DELTA_P_GAIN_SCALE)
+        }
+    };
     Range {
         lower: 0.0,
-        upper: upper.max(p.controller.kdp),
-        scale: upper * DELTA_P_GAIN_SCALE,
+        upper: upper.max(which.get(p)),
+        scale,
     }
 }
 
-/// Whether the campaign leaves the delta-P gain unknown (then it is refined, from the
-/// closed-loop fit's zero: [`REFINED_GAIN`]).
-pub(super) fn delta_p_gain_unknown(c: &Campaign) -> bool {
+/// The controller gains the campaign leaves unknown (then refined: [`REFINED_GAINS`]).
+pub(super) fn unknown_gains(c: &Campaign) -> Vec<BaselineParameter> {
     let unknown = c.info.apply_known(&mut Params::trees_lab());
-    unknown.contains(&"controller.kdp")
+    let key = |w: BaselineParameter| match w {
+        DisplacementGain => "controller.kp",
+        VelocityFeedForward => "controller.fv",
+        _ => "controller.kdp",
+    };
+    REFINED_GAINS
+        .into_iter()
+        .filter(|&w| unknown.contains(&key(w)))
+        .collect()
 }
 
 /// The valve's dynamics for its model, refined for the baseline only (within 10 % of the
@@ -270,9 +302,13 @@ fn range_within(p: &Params, which: BaselineParameter, width: f64) -> Range {
 /// to its bound (leakage or friction to zero under a saturating flow), and the candidate
 /// must be able to unbend it back to the section-4 estimate; the scale is the first's.
 pub(super) fn candidate_range(bases: &[Params], which: BaselineParameter) -> Range {
-    let mut r = range_within(&bases[0], which, CANDIDATE_WIDTH);
+    let within = |p: &Params| match which {
+        VelocityFeedForward | DeltaPGain => gain_range(p, which),
+        _ => range_within(p, which, CANDIDATE_WIDTH),
+    };
+    let mut r = within(&bases[0]);
     for b in &bases[1..] {
-        let other = range_within(b, which, CANDIDATE_WIDTH);
+        let other = within(b);
         r.lower = r.lower.min(other.lower);
         r.upper = r.upper.max(other.upper);
     }
@@ -319,12 +355,14 @@ pub(super) fn mass_is_scale(c: &Campaign) -> bool {
         && !c.info.tests.iter().any(|t| kdp_known(&t.controller))
 }
 
-/// [`REFINED`] without the table mass when it is only a scale ([`mass_is_scale`]).
+/// [`REFINED`] without the table mass when it is only a scale ([`mass_is_scale`]), and
+/// with the gains the campaign leaves unknown ([`unknown_gains`]).
 pub(super) fn refined_for(c: &Campaign) -> Vec<BaselineParameter> {
     let scale = mass_is_scale(c);
     REFINED
         .into_iter()
         .filter(|&w| !(scale && w == TableMass))
+        .chain(unknown_gains(c))
         .collect()
 }
 
@@ -360,7 +398,7 @@ fn refinement_range(p: &Params, which: BaselineParameter, c: &Campaign) -> Range
             let width = which.refinement_width().unwrap_or(0.0);
             range_within(p, which, width.max(CANDIDATE_WIDTH))
         }
-        DeltaPGain => delta_p_gain_range(p),
+        VelocityFeedForward | DeltaPGain => gain_range(p, which),
         _ => match which.refinement_width() {
             Some(width) => range_within(p, which, width),
             None => stiffness_range(p),
@@ -401,15 +439,10 @@ pub(super) fn refine_output_error(
     } else {
         &[]
     };
-    let gain: &[BaselineParameter] = match delta_p_gain_unknown(c) {
-        true => &REFINED_GAIN,
-        false => &[],
-    };
     let free: Vec<BaselineParameter> = refined_for(c)
         .iter()
         .chain(freed_with_force)
         .chain(valve_dynamics(p0))
-        .chain(gain)
         .copied()
         .collect();
     let ranges: Vec<Range> = free.iter().map(|&w| refinement_range(p0, w, c)).collect();
@@ -501,7 +534,7 @@ mod tests {
             r.valve_command = None;
         }
         c.info.controller = ControllerOverride::default();
-        assert!(delta_p_gain_unknown(&c) && table_from_motion(&c));
+        assert!(unknown_gains(&c).contains(&DeltaPGain) && table_from_motion(&c));
         let noise = estimate_noise(&c);
         let whitening = Whitening::new(&truth, &c, &[0], &noise, Part::Fit);
         let a = &truth.actuator;

@@ -247,7 +247,7 @@ impl Diagnosis {
             .collect();
         (!ratios.is_empty()).then(|| {
             format!(
-                "No force channel: the table mass is a convention ({:.3} t in the extended model) and the masses above are on its scale; only their ratios to it can be measured (and a specimen's is loosely held by the motion alone): {}",
+                "No force channel: the table mass is a convention ({:.3} t in the extended model) and the masses above are on its scale; only their ratios to it are measured (every fit holds it, and a specimen that takes its mass out of it is fitted against the rest): {}",
                 self.extended.table.mass_kg / 1000.0,
                 ratios.join(", ")
             )
