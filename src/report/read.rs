@@ -156,10 +156,7 @@ pub fn screening_section(findings: &[Finding]) -> Section {
             f.test.clone(),
             f.file.clone(),
             f.channel.clone(),
-            match f.action {
-                Action::Repaired => "repaired".into(),
-                Action::TestExcluded => "test excluded from estimation".into(),
-            },
+            f.action.label().into(),
             f.message.clone(),
         ]);
     }
@@ -174,7 +171,8 @@ pub fn screening_section(findings: &[Finding]) -> Section {
         false => format!(
             "Before estimating, every record is screened: isolated bad samples are repaired by \
              interpolation, anything worse excludes the test, with the reason ({excluded} \
-             exclusion{}).",
+             exclusion{}); a displacement that follows a reference nobody recorded is not \
+             compared with the model.",
             if excluded == 1 { "" } else { "s" }
         ),
     };
