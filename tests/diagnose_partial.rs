@@ -28,10 +28,10 @@ fn synthesise(dir: &Path, effects: &[&str], seed: u64) {
 /// (the channels the lab recorded), campaign.toml maps them in a `[columns]` table (the
 /// laboratories' form, where every channel but a reference and a response is optional),
 /// and without `with_gains` it leaves the geometry and controller gains unwritten. A
-/// test's own override stays (the acceleration-controlled tests ran without the
-/// feed-forward): a lab knows which tests ran another controller. Hidden, it leaves one
-/// feed-forward for two controllers, which the closed-loop fit cannot represent (a
-/// known limit: the displacement-controlled tests then miss by up to 300 noise RMS).
+/// test's own override stays (the paper's R1 ran without the feed-forward): a lab knows
+/// which tests ran another controller. Hidden, it leaves one feed-forward for two
+/// controllers, which the closed-loop fit cannot represent (a known limit: the fit
+/// follows R1, and the fast sines then miss by up to 300 noise RMS).
 fn recorded_only(dir: &Path, columns: &[&str], with_gains: bool) {
     for entry in std::fs::read_dir(dir).unwrap() {
         let path = entry.unwrap().path();
