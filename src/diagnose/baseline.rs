@@ -341,18 +341,16 @@ pub(super) fn force_recorded(c: &Campaign) -> bool {
 }
 
 /// Whether the table mass is only a scale: no test recorded the force and no known
-/// delta-P gain reads it into the command (the closed-loop fit's rule: it then holds the
-/// mass at a convention). The motion is unchanged when the masses, the bulk modulus, the
+/// delta-P gain in campaign.toml's `[controller]` reads it into the command (the
+/// closed-loop fit's rule, which then holds the mass at a convention: the two must agree,
+/// or the diagnosis would free a mass its output calls a convention). The motion is unchanged when the masses, the bulk modulus, the
 /// friction force and the inverse of the leakage and of the delta-P gain all scale
 /// together, so the refinement and the candidates' fits hold the mass too: freed, it
 /// walked that null direction (a 3-t specimen on a 6-t table came out 8.2 t in one run
 /// and 15.5 t in another, against fitted table masses that moved as far), and a named
 /// mass is only meaningful as a ratio to a table mass that stays put.
 pub(super) fn mass_is_scale(c: &Campaign) -> bool {
-    let kdp_known = |k: &crate::campaign::ControllerOverride| k.kdp.is_some_and(|k| k > 0.0);
-    !force_recorded(c)
-        && !kdp_known(&c.info.controller)
-        && !c.info.tests.iter().any(|t| kdp_known(&t.controller))
+    !force_recorded(c) && !c.info.controller.kdp.is_some_and(|k| k > 0.0)
 }
 
 /// [`REFINED`] without the table mass when it is only a scale ([`mass_is_scale`]), and
@@ -569,7 +567,7 @@ mod tests {
         assert!(!mass_is_scale(&c), "the campaign states Kdp");
         c.info.controller.kdp = None;
         assert!(mass_is_scale(&c));
-        c.info.tests[0].controller.kdp = Some(1e-8);
-        assert!(!mass_is_scale(&c), "a test states Kdp");
+        c.info.controller.kdp = Some(0.0);
+        assert!(mass_is_scale(&c), "a zero Kdp reads no force");
     }
 }
