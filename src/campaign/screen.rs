@@ -3,7 +3,9 @@
 //! declared `kind` that contradicts the reference or a force sign that contradicts the
 //! energy balance ([`kind`]). Isolated bad samples are repaired by
 //! linear interpolation with a note; anything worse excludes the test from estimation
-//! with the reason. Estimators then see only the screened campaign.
+//! with the reason. Estimators then see only the screened campaign. A displacement that
+//! follows a reference nobody recorded is kept for section 4 but not compared with the
+//! model ([`Screening::compared`]).
 
 use super::{Campaign, Record, TestKind, TestSpec};
 use serde::Serialize;
@@ -41,8 +43,8 @@ pub enum Action {
     Repaired,
     /// The test is not used for estimation.
     TestExcluded,
-    /// The channel is kept out of every comparison with the model (the rest of the test
-    /// is used).
+    /// The channel is kept out of every comparison with the model (section 4 and the
+    /// rest of the test still use it).
     ChannelSetAside,
 }
 
@@ -79,12 +81,31 @@ impl std::fmt::Display for Finding {
 }
 
 /// What was read (every test, before screening), the screened campaign (excluded tests
-/// removed, repaired samples replaced) and what was found.
+/// removed, repaired samples replaced), what was found, and the tests whose displacement
+/// is kept for section 4 but not compared with the model ([`Screening::compared`]).
 #[derive(Debug, Clone)]
 pub struct Screening {
     pub read: super::provenance::CampaignRead,
     pub campaign: Campaign,
     pub findings: Vec<Finding>,
+    pub displacement_set_aside: Vec<String>,
+}
+
+impl Screening {
+    /// The screened campaign as the model is compared with it: without the displacement
+    /// of the tests in `displacement_set_aside` (a copy only when there are some).
+    pub fn compared(&self) -> std::borrow::Cow<'_, Campaign> {
+        if self.displacement_set_aside.is_empty() {
+            return std::borrow::Cow::Borrowed(&self.campaign);
+        }
+        let mut c = self.campaign.clone();
+        for (spec, rec) in c.info.tests.iter().zip(c.records.iter_mut()) {
+            if self.displacement_set_aside.contains(&spec.name) {
+                rec.displacement_m = None;
+            }
+        }
+        std::borrow::Cow::Owned(c)
+    }
 }
 
 /// Screen every record of `c`.
@@ -93,12 +114,15 @@ pub fn screen(c: &Campaign) -> Screening {
     out.info.tests.clear();
     out.records.clear();
     let mut findings = Vec::new();
+    let mut displacement_set_aside = Vec::new();
     for (spec, rec) in c.info.tests.iter().zip(&c.records) {
         let mut rec = rec.clone();
         let before = findings.len();
         let ok = screen_record(spec, &mut rec, c.sample_rate_for(spec), &mut findings);
-        if ok {
-            set_aside_unreferenced_displacement(c, spec, &mut rec, &mut findings);
+        if ok && displacement_follows_unrecorded_reference(c, spec, &rec) {
+            displacement_set_aside.push(spec.name.clone());
+            let why = SET_ASIDE_DISPLACEMENT.to_string();
+            findings.push(finding("displacement_m", Action::ChannelSetAside, why));
         }
         for f in &mut findings[before..] {
             f.test = spec.name.clone();
@@ -113,39 +137,35 @@ pub fn screen(c: &Campaign) -> Screening {
         read: c.what_was_read(),
         campaign: out,
         findings,
+        displacement_set_aside,
     }
 }
 
-/// The measured displacement of an acceleration-controlled test whose displacement
-/// reference was not recorded but integrated here from its reference acceleration
-/// (campaign-format.md, "What is required"): below the test's band the table follows
-/// the controller's own integration of that acceleration, whose filters nobody wrote
-/// down, so the model, driven by ours, misses it there by far more than the noise
-/// (measured: 11.5 noise RMS below 2 Hz on a clean emulated table at 1 kHz). The
-/// displacement is set aside, with a finding, when the test recorded the acceleration to
-/// compare instead.
-fn set_aside_unreferenced_displacement(
-    c: &Campaign,
-    spec: &TestSpec,
-    rec: &mut Record,
-    findings: &mut Vec<Finding>,
-) {
+/// Why a displacement is set aside ([`displacement_follows_unrecorded_reference`]).
+const SET_ASIDE_DISPLACEMENT: &str = "the test is under acceleration control and its \
+     displacement reference was integrated from the reference acceleration, not recorded: \
+     the table's slow displacement follows the controller's own integration, which is not \
+     known; kept for section 4, and the acceleration is compared with the model instead \
+     (map the controller's displacement reference as ref_displacement_m to compare it)";
+
+/// Whether the measured displacement of acceleration-controlled test `spec` follows a
+/// displacement reference that was not recorded but integrated here from its reference
+/// acceleration (campaign-format.md, "What is required"), while the acceleration, to
+/// compare instead, was recorded. Below the test's band the table follows the
+/// controller's own integration of that acceleration, whose filters nobody wrote down, so
+/// the model, driven by ours, misses it there by far more than the noise (measured: 11.5
+/// noise RMS below 2 Hz on a clean emulated table at 1 kHz). Such a displacement is not
+/// compared with the model; section 4, which reads the measured channels against each
+/// other, keeps it.
+fn displacement_follows_unrecorded_reference(c: &Campaign, spec: &TestSpec, rec: &Record) -> bool {
     let integrated = c
         .sources
         .get(&spec.name)
         .and_then(|s| s.of("ref_displacement_m"))
         .is_some_and(|s| matches!(s, super::provenance::Source::Computed { .. }));
     let under_acceleration = spec.control == super::Control::Acceleration;
-    if !(integrated && under_acceleration && rec.acceleration_m_s2.is_some()) {
-        return;
-    }
-    if rec.displacement_m.take().is_some() {
-        findings.push(finding(
-            "displacement_m",
-            Action::ChannelSetAside,
-            "the test is under acceleration control and its displacement reference was integrated from the reference acceleration, not recorded: the table's slow displacement follows the controller's own integration, which is not known; the acceleration is compared instead (map the controller's displacement reference as ref_displacement_m to compare it)".into(),
-        ));
-    }
+    let both = rec.acceleration_m_s2.is_some() && rec.displacement_m.is_some();
+    integrated && under_acceleration && both
 }
 
 fn finding(channel: &str, action: Action, message: String) -> Finding {
@@ -429,11 +449,15 @@ mod tests {
         let name = c.info.tests[0].name.clone();
         let recorded = with_reference(Source::same_column("REF_D"));
         c.sources.insert(name.clone(), recorded);
-        assert!(screen(&c).campaign.records[0].displacement_m.is_some());
+        assert!(screen(&c).compared().records[0].displacement_m.is_some());
         let integrated = Source::computed_reference(crate::campaign::Control::Acceleration, "x");
         c.sources.insert(name, with_reference(integrated));
         let s = screen(&c);
-        assert!(s.campaign.records[0].displacement_m.is_none());
+        assert!(
+            s.campaign.records[0].displacement_m.is_some(),
+            "kept for section 4"
+        );
+        assert!(s.compared().records[0].displacement_m.is_none());
         let f = &s.findings[0];
         assert_eq!(
             (f.action, f.channel.as_str()),
@@ -442,6 +466,6 @@ mod tests {
         assert_eq!((f.test.as_str(), f.file.as_str()), ("R2", "R2.csv"));
         assert!(f.message.contains("integrated"), "{}", f.message);
         c.records[0].acceleration_m_s2 = None;
-        assert!(screen(&c).campaign.records[0].displacement_m.is_some());
+        assert!(screen(&c).compared().records[0].displacement_m.is_some());
     }
 }

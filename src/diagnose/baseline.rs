@@ -40,9 +40,10 @@ pub fn residual_vector(
 
 /// The baseline parameters a fit may free, by name. The valve is first fitted on the
 /// spool channel alone ([`crate::identify::spool::refine_servovalve`]), where the flow
-/// effects cannot bend it; the output-error refinement then frees [`REFINED`],
-/// [`REFINED_FRICTION`], [`REFINED_SPRING`] and the valve dynamics, the candidates' fits
-/// [`REFINED`] only.
+/// effects cannot bend it; the output-error refinement then frees [`refined_for`] (the
+/// table's parameters and the gains nobody gave), [`REFINED_FRICTION`], [`REFINED_SPRING`]
+/// and the valve dynamics, the candidates' fits [`refined_for`] (and the valve's dynamics
+/// without a spool channel).
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub(super) enum BaselineParameter {
     TableMass,
@@ -230,7 +231,10 @@ fn gain_range(p: &Params, which: BaselineParameter) -> Range {
     let (upper, scale) = match which {
         VelocityFeedForward => {
             let full = p.actuator.piston_area_m2 / (p.actuator.flow_gain_m3_s * p.servovalve.gain);
-            (2.0 * full, full)
+            (
+                crate::identify::greybox::FEED_FORWARD_RATIO_BOUND * full,
+                full,
+            )
         }
         _ => {
             let open = 1.0 / (p.table.mass_kg * STANDARD_GRAVITY_M_S2);
@@ -342,25 +346,32 @@ pub(super) fn force_recorded(c: &Campaign) -> bool {
 
 /// Whether the table mass is only a scale: no test recorded the force and no known
 /// delta-P gain in campaign.toml's `[controller]` reads it into the command (the
-/// closed-loop fit's rule, which then holds the mass at a convention: the two must agree,
-/// or the diagnosis would free a mass its output calls a convention). The motion is unchanged when the masses, the bulk modulus, the
-/// friction force and the inverse of the leakage and of the delta-P gain all scale
-/// together, so the refinement and the candidates' fits hold the mass too: freed, it
-/// walked that null direction (a 3-t specimen on a 6-t table came out 8.2 t in one run
-/// and 15.5 t in another, against fitted table masses that moved as far), and a named
-/// mass is only meaningful as a ratio to a table mass that stays put.
+/// closed-loop fit's rule, [`crate::identify::greybox::mass_separable`]: the two agree,
+/// so the diagnosis never frees a mass its output calls a convention). The motion is
+/// unchanged when the masses, the bulk modulus, the friction force and the inverse of the
+/// leakage and of the delta-P gain all scale together, so the refinement and the
+/// candidates' fits hold the mass too: freed, it walked that null direction (a 3-t
+/// specimen on a 6-t table came out 8.2 t in one run and 15.5 t in another, against
+/// fitted table masses that moved as far), and a named mass is only meaningful as a
+/// ratio to the table mass of the fit that named it.
 pub(super) fn mass_is_scale(c: &Campaign) -> bool {
-    !force_recorded(c) && !c.info.controller.kdp.is_some_and(|k| k > 0.0)
+    !crate::identify::greybox::mass_separable(force_recorded(c), &c.info.controller)
 }
 
 /// [`REFINED`] without the table mass when it is only a scale ([`mass_is_scale`]), and
-/// with the gains the campaign leaves unknown ([`unknown_gains`]).
+/// with the gains the campaign leaves unknown ([`unknown_gains`]); with an unknown
+/// displacement gain the flow gain is held, as the closed-loop fit holds it: the command
+/// is linear in Kp, Fv and Kdp, so the flow gain times their inverse leaves the motion
+/// unchanged (but at the command's clip).
 pub(super) fn refined_for(c: &Campaign) -> Vec<BaselineParameter> {
     let scale = mass_is_scale(c);
+    let gains = unknown_gains(c);
+    let loop_gain_in_kp = gains.contains(&DisplacementGain);
     REFINED
         .into_iter()
         .filter(|&w| !(scale && w == TableMass))
-        .chain(unknown_gains(c))
+        .filter(|&w| !(loop_gain_in_kp && w == FlowGain))
+        .chain(gains)
         .collect()
 }
 
@@ -381,8 +392,8 @@ pub(super) fn from_motion(c: &Campaign) -> bool {
 const CANDIDATE_WIDTH: f64 = 0.5;
 
 /// Range of a baseline parameter in the baseline's refinement
-/// ([`BaselineParameter::refinement_width`]); the stiffness's is absolute
-/// ([`stiffness_range`]). With no spool to pin the valve its dynamics are as free as in
+/// ([`BaselineParameter::refinement_width`]); the stiffness's and the unknown
+/// feed-forward's and delta-P gain's are absolute ([`stiffness_range`], [`gain_range`]). With no spool to pin the valve its dynamics are as free as in
 /// the candidates' fits, and so are the table's parameters when they came from the motion
 /// ([`table_from_motion`]): narrower, the baseline stays where the closed-loop fit's
 /// excerpts and estimation tests left it, and every candidate, free to move them, then
@@ -415,9 +426,10 @@ pub(super) struct Refined {
 }
 
 /// Output-error refinement of `p0` on the fitting halves of `tests`: the baseline
-/// parameters of [`REFINED`], [`REFINED_FRICTION`] and [`REFINED_SPRING`] (these two
-/// only with a force channel) and the valve dynamics within their refinement ranges, and, with `effect`, that effect's parameters
-/// from `theta0` (held, in `p0`, for an effect [`Effect::fitted_on_score`]) within their
+/// parameters of [`refined_for`] (the table mass held where it is only a scale, the gains
+/// nobody gave freed), [`REFINED_FRICTION`] and [`REFINED_SPRING`] (these two only with a
+/// force channel) and the valve dynamics within their refinement ranges, and, with
+/// `effect`, that effect's parameters from `theta0` (held, in `p0`, for an effect [`Effect::fitted_on_score`]) within their
 /// bounds for the table `table`. The iterations are capped at `iterations`: a baseline
 /// that lacks an effect does not converge and need not.
 pub(super) fn refine_output_error(

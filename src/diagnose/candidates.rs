@@ -79,9 +79,10 @@ const FOUNDATION_SERIES_MARGIN: f64 = 1.5;
 /// parameters the other baseline parameters are taken from.
 pub(super) type Start = (Vec<f64>, Params);
 
-/// The baseline parameters a candidate's fit frees with the effect: [`super::baseline::REFINED`] (without
-/// the table mass when it is only a scale: [`super::baseline::mass_is_scale`]), and the
-/// valve's dynamics when no test recorded the spool. Then the valve comes from the
+/// The baseline parameters a candidate's fit frees with the effect:
+/// [`super::baseline::refined_for`] (the table's parameters, without the mass where it is
+/// only a scale, with the gains nobody gave), and the valve's dynamics when no test
+/// recorded the spool. Then the valve comes from the
 /// closed-loop fit of the table's motion, which bent it to absorb the missing effect (a
 /// 20-t specimen fitted on the bent valve scored worse than the baseline it extends).
 fn candidate_free(c: &Campaign, base: &Params) -> Vec<BaselineParameter> {

@@ -1,7 +1,9 @@
 //! The free play's fit: from the gap read off the data ([`super::free_play_start`]),
 //! polished on the predictive score (its impacts have no reproducible phase).
 
-use super::baseline::{candidate_range, refine_output_error, BaselineParameter, Range};
+use super::baseline::{
+    candidate_range, mass_is_scale, refine_output_error, BaselineParameter, Range,
+};
 use super::effect::Effect;
 use super::part::Part;
 use super::residuals::{self, NoiseFloor, Whitening};
@@ -12,7 +14,8 @@ use crate::params::Params;
 /// The baseline parameters polished with the gap and the rod's mass: the oil column,
 /// which section 4 reads softened by the gap (the rod bounces in it at the oil-column
 /// test's small strokes: a 1.5-mm gap left the bulk modulus 42 % low, seed 703), the
-/// leakage and the table's mass, which absorb the rest of its impacts there.
+/// leakage and the table's mass, which absorb the rest of its impacts there (the mass
+/// held where it is only a scale: [`mass_is_scale`]).
 const POLISHED: [BaselineParameter; 3] = [
     BaselineParameter::BulkModulus,
     BaselineParameter::Leakage,
@@ -78,9 +81,17 @@ pub(super) fn fit_free_play(
     let (lower, upper) = e.bounds(&bases[0]);
     // the gap held within the reading's span: beyond it the nearest gap in the span
     let gap_span = [start[0] / GAP_READ_SPAN, start[0] * GAP_READ_SPAN];
+    // a table mass that is only a scale stays where the baseline holds it
+    let mass_at = 2 + POLISHED
+        .iter()
+        .position(|w| *w == BaselineParameter::TableMass)?;
+    let mass_held = mass_is_scale(c).then_some(bases[0].table.mass_kg);
     let held = |x: &[f64]| {
         let mut y = x.to_vec();
         y[0] = y[0].clamp(gap_span[0], gap_span[1]);
+        if let Some(m) = mass_held {
+            y[mass_at] = m;
+        }
         y
     };
     let mut ranges: Vec<Range> = POLISHED

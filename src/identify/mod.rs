@@ -322,14 +322,16 @@ pub fn identify_screened_with(s: &Screening, scope: Scope) -> Identification {
         oil_column: oil.is_some(),
         friction: friction.is_some(),
     };
-    let closed_loop =
-        closed_loop(c, &p, known, &unknown_inputs).and_then(|r| r.map_err(|e| note(Err(e))).ok());
+    // the model is compared with the campaign without the set-aside displacements
+    let compared = s.compared();
+    let closed_loop = closed_loop(&compared, &p, known, &unknown_inputs)
+        .and_then(|r| r.map_err(|e| note(Err(e))).ok());
     if let Some(cl) = &closed_loop {
         p = cl.params;
     }
     let comparison = match (&closed_loop, scope) {
         (Some(cl), _) => cl.fits.clone(),
-        (None, Scope::Complete) => compare_all(c, &p),
+        (None, Scope::Complete) => compare_all(&compared, &p),
         (None, Scope::Parameters) => Vec::new(),
     };
     // the segments of the random tests' spectra, at the rate of the first one used (a

@@ -164,6 +164,7 @@ pub fn screening_section(findings: &[Finding]) -> Section {
         .iter()
         .filter(|f| f.action == Action::TestExcluded)
         .count();
+    let set_aside = findings.iter().any(|f| f.action == Action::ChannelSetAside);
     let text = match findings.is_empty() {
         true => "No finding: every channel finite, no spikes, no flat channel, signs consistent \
                  with physics, every declared kind matches its reference."
@@ -171,9 +172,14 @@ pub fn screening_section(findings: &[Finding]) -> Section {
         false => format!(
             "Before estimating, every record is screened: isolated bad samples are repaired by \
              interpolation, anything worse excludes the test, with the reason ({excluded} \
-             exclusion{}); a displacement that follows a reference nobody recorded is not \
-             compared with the model.",
-            if excluded == 1 { "" } else { "s" }
+             exclusion{}).{}",
+            if excluded == 1 { "" } else { "s" },
+            if set_aside {
+                " A displacement that follows a reference nobody recorded is kept for section 4 \
+                 but not compared with the model."
+            } else {
+                ""
+            }
         ),
     };
     let tables = if findings.is_empty() { vec![] } else { vec![t] };

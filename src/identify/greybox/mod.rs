@@ -23,8 +23,8 @@ mod structure;
 
 pub use combinations::{Combination, INSEPARABLE_CORRELATION};
 pub use compare::{ChannelFit, Comparison, Role, Trace};
-pub use parameters::GreyParameter;
-pub use structure::{Convention, Known};
+pub use parameters::{GreyParameter, FEED_FORWARD_RATIO_BOUND};
+pub use structure::{mass_separable, Convention, Known};
 
 use super::error::IdentifyError;
 use super::lsq::{minimise, LsqFit, LsqOptions};

@@ -73,6 +73,10 @@ const VALVE_DAMPING: [f64; 2] = [0.3, 20.0];
 /// Largest friction amplitude searched, N: ten times the largest actuators' force
 /// (about 10 MN), so only the data bound it.
 const FRICTION_CEILING_N: f64 = 1e8;
+/// Largest velocity feed-forward searched, as a multiple of the full one `A / (Ks Kq)`
+/// (which alone gives the reference velocity): twice, so a full feed-forward read high
+/// in noise is inside the range.
+pub const FEED_FORWARD_RATIO_BOUND: f64 = 2.0;
 /// Displacement gains searched, 1/m: a loop gain from 1e-4 to 1e4 of the TREES Lab table's.
 const DISPLACEMENT_GAIN_1_M: [f64; 2] = [1e-3, 1e5];
 
@@ -143,7 +147,8 @@ impl GreyParameter {
             // up to twice the feed-forward that alone would give the reference velocity
             VelocityFeedForward => [
                 0.0,
-                2.0 * a.piston_area_m2 / (a.flow_gain_m3_s * p.servovalve.gain),
+                FEED_FORWARD_RATIO_BOUND * a.piston_area_m2
+                    / (a.flow_gain_m3_s * p.servovalve.gain),
             ],
             ValveTimeConstant => VALVE_TIME_CONSTANT_S,
             ValveNaturalFrequency => VALVE_NATURAL_FREQUENCY_HZ,

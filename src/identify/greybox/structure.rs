@@ -99,10 +99,7 @@ pub fn choose(p: &mut Params, c: &Campaign, tests: &[usize], known: Known) -> St
     if !known.oil_column {
         free.extend([BulkModulus, Leakage]);
     }
-    // the mass is a scale only while nothing in the loop reads the force: a force channel,
-    // or a known delta-P gain (the command then holds Kdp M a), makes it separable
-    let force_read = with_force || gains.kdp.is_some_and(|k| k > 0.0);
-    if !known.mass && force_read {
+    if !known.mass && mass_separable(with_force, gains) {
         free.push(TableMass);
     } else if !known.mass {
         convention("table.mass_kg", p.table.mass_kg, NOT_SEPARABLE_MASS);
@@ -156,6 +153,14 @@ pub fn choose(p: &mut Params, c: &Campaign, tests: &[usize], known: Known) -> St
         conventions,
         with_force,
     }
+}
+
+/// Whether the motion separates the table mass from the oil column's stiffness: only
+/// while something in the loop reads the force, a force channel or a known delta-P gain
+/// (the command then holds `Kdp M a`). Otherwise the mass is a scale, held at a
+/// convention (here and in the diagnosis).
+pub fn mass_separable(with_force: bool, gains: &ControllerOverride) -> bool {
+    with_force || gains.kdp.is_some_and(|k| k > 0.0)
 }
 
 impl Structure {
