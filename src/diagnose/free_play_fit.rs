@@ -82,15 +82,16 @@ pub(super) fn fit_free_play(
     // the gap held within the reading's span: beyond it the nearest gap in the span
     let gap_span = [start[0] / GAP_READ_SPAN, start[0] * GAP_READ_SPAN];
     // a table mass that is only a scale stays where the baseline holds it
-    let mass_at = 2 + POLISHED
+    let mass_held = POLISHED
         .iter()
-        .position(|w| *w == BaselineParameter::TableMass)?;
-    let mass_held = mass_is_scale(c).then_some(bases[0].table.mass_kg);
+        .position(|w| *w == BaselineParameter::TableMass)
+        .filter(|_| mass_is_scale(c))
+        .map(|k| (2 + k, bases[0].table.mass_kg));
     let held = |x: &[f64]| {
         let mut y = x.to_vec();
         y[0] = y[0].clamp(gap_span[0], gap_span[1]);
-        if let Some(m) = mass_held {
-            y[mass_at] = m;
+        if let Some((at, m)) = mass_held {
+            y[at] = m;
         }
         y
     };
