@@ -59,7 +59,7 @@ def lab_file(src, dst, control, channels, ref_both):
             f.write("\t".join([str(k + 1), *(f"{out[c][k]:.7g}" for c in out)]) + "\n")
 
 
-def lab_campaign(synth_dir, out_dir, rate_hz, channels, ref_both):
+def lab_campaign(synth_dir, out_dir, rate_hz, channels, ref_both, test_gains=True):
     with open(os.path.join(synth_dir, "campaign.toml"), "rb") as f:
         camp = tomllib.load(f)
     os.makedirs(out_dir, exist_ok=True)
@@ -91,7 +91,7 @@ def lab_campaign(synth_dir, out_dir, rate_hz, channels, ref_both):
         for key in ("frequency_hz", "amplitude_m", "rms", "band_hz"):
             if key in t:
                 lines.append(f"{key} = {t[key]}")
-        if "controller" in t:
+        if "controller" in t and test_gains:
             gains = ", ".join(f"{k} = {v}" for k, v in t["controller"].items())
             lines.append(f"controller = {{ {gains} }}")
         # each test maps its own reference: the controlled quantity differs by test
@@ -118,6 +118,9 @@ def main():
     ap.add_argument("--identify-only", action="store_true")
     ap.add_argument("--ref-both", action="store_true",
                     help="acceleration-controlled tests record their displacement reference too")
+    ap.add_argument("--no-test-gains", action="store_true",
+                    help="drop the tests' own controller overrides (R1's fv = 0): a lab that "
+                         "does not say which tests ran another controller (a known limit)")
     args = ap.parse_args()
     synth = args.out_dir + ".synth"
     cmd = ["campaign", "synth", "--quiet", "--force", "--seed", str(args.seed)]
@@ -128,7 +131,8 @@ def main():
     for e in args.effect:
         cmd += ["--effect", e]
     run(cmd + [synth])
-    lab_campaign(synth, args.out_dir, args.rate, args.channels.split(","), args.ref_both)
+    lab_campaign(synth, args.out_dir, args.rate, args.channels.split(","), args.ref_both,
+                 not args.no_test_gains)
     run(["campaign", "check", args.out_dir])
     j_id = os.path.join(args.out_dir, "..", os.path.basename(args.out_dir) + ".id.json")
     t_id = run(["identify", args.out_dir, "--json", j_id, "--force"])
