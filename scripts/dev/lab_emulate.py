@@ -12,7 +12,10 @@ would and prints what they said against the truth:
 
 The campaign is synthesised at `--rate` (`campaign synth --sample-rate`), each recording
 written as tab-separated text in mm, g and volts of reference (10 mm/V) after a
-four-line header block, and mapped back by campaign.toml's `[columns]`.
+four-line header block, and mapped back by campaign.toml's `[columns]`. The campaign gives
+no gains or geometry; a test's own controller override (the paper's R1 runs without the
+feed-forward) is kept, as a lab that knows its programme writes it, unless
+`--no-test-gains`.
 """
 import argparse
 import csv
