@@ -89,22 +89,27 @@ pub struct Screening {
     pub campaign: Campaign,
     pub findings: Vec<Finding>,
     pub displacement_set_aside: Vec<String>,
+    /// [`Screening::compared`], made once (identification and diagnosis both read it).
+    compared: std::sync::OnceLock<Campaign>,
 }
 
 impl Screening {
     /// The screened campaign as the model is compared with it: without the displacement
-    /// of the tests in `displacement_set_aside` (a copy only when there are some).
-    pub fn compared(&self) -> std::borrow::Cow<'_, Campaign> {
+    /// of the tests in `displacement_set_aside` (a copy, made once, only when there are
+    /// some).
+    pub fn compared(&self) -> &Campaign {
         if self.displacement_set_aside.is_empty() {
-            return std::borrow::Cow::Borrowed(&self.campaign);
+            return &self.campaign;
         }
-        let mut c = self.campaign.clone();
-        for (spec, rec) in c.info.tests.iter().zip(c.records.iter_mut()) {
-            if self.displacement_set_aside.contains(&spec.name) {
-                rec.displacement_m = None;
+        self.compared.get_or_init(|| {
+            let mut c = self.campaign.clone();
+            for (spec, rec) in c.info.tests.iter().zip(c.records.iter_mut()) {
+                if self.displacement_set_aside.contains(&spec.name) {
+                    rec.displacement_m = None;
+                }
             }
-        }
-        std::borrow::Cow::Owned(c)
+            c
+        })
     }
 }
 
@@ -138,6 +143,7 @@ pub fn screen(c: &Campaign) -> Screening {
         campaign: out,
         findings,
         displacement_set_aside,
+        compared: std::sync::OnceLock::new(),
     }
 }
 

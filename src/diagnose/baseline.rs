@@ -205,18 +205,6 @@ fn stiffness_range(p: &Params) -> Range {
     }
 }
 
-/// The controller's gains, refined (for the baseline, the polish and the candidates)
-/// when the campaign leaves them unknown ([`unknown_gains`]): the closed-loop fit then
-/// set them from the motion, with no effect in the model, and bent them for the effect it
-/// lacked (a 12-t specimen at 9 Hz left the displacement-controlled random test 13 noise
-/// RMS off below 1 Hz once it was named, with the gains held). The delta-P gain the fit
-/// holds at zero, letting the leakage damp the oil column, which matches the motion's
-/// NRMSE as well (measured: cost 1.80003 against 1.79996 with the true gain, TREES Lab
-/// table at 1 kHz) but not its upper octaves, where the feedback acts through the
-/// valve's lag: there a 45-Hz foundation was named on a clean table.
-pub(super) const REFINED_GAINS: [BaselineParameter; 3] =
-    [DisplacementGain, VelocityFeedForward, DeltaPGain];
-
 /// Standard gravity, m/s^2: the delta-P gain's range is stated per g of table motion.
 const STANDARD_GRAVITY_M_S2: f64 = 9.80665;
 /// The delta-P gain's search scale as a share of its range: a valve opening of 1 % per g
@@ -248,18 +236,26 @@ fn gain_range(p: &Params, which: BaselineParameter) -> Range {
     }
 }
 
-/// The controller gains the campaign leaves unknown (then refined: [`REFINED_GAINS`]).
+/// The controller gains (Kp, Fv, Kdp) the campaign leaves unknown, refined for the
+/// baseline, the polish and the candidates ([`refined_for`]): the closed-loop fit
+/// set them from the motion, with no effect in the model, and bent them for the effect it
+/// lacked (a 12-t specimen at 9 Hz left the displacement-controlled random test 13 noise
+/// RMS off below 1 Hz once it was named, with the gains held). The delta-P gain the fit
+/// holds at zero, letting the leakage damp the oil column, which matches the motion's
+/// NRMSE as well (measured: cost 1.80003 against 1.79996 with the true gain, TREES Lab
+/// table at 1 kHz) but not its upper octaves, where the feedback acts through the
+/// valve's lag: there a 45-Hz foundation was named on a clean table.
 pub(super) fn unknown_gains(c: &Campaign) -> Vec<BaselineParameter> {
-    let unknown = c.info.apply_known(&mut Params::trees_lab());
-    let key = |w: BaselineParameter| match w {
-        DisplacementGain => "controller.kp",
-        VelocityFeedForward => "controller.fv",
-        _ => "controller.kdp",
-    };
-    REFINED_GAINS
-        .into_iter()
-        .filter(|&w| unknown.contains(&key(w)))
-        .collect()
+    let k = &c.info.controller;
+    [
+        (DisplacementGain, k.kp),
+        (VelocityFeedForward, k.fv),
+        (DeltaPGain, k.kdp),
+    ]
+    .into_iter()
+    .filter(|(_, given)| given.is_none())
+    .map(|(w, _)| w)
+    .collect()
 }
 
 /// The valve's dynamics for its model, refined for the baseline only (within 10 % of the
@@ -335,8 +331,7 @@ pub(super) fn spool_recorded(c: &Campaign) -> bool {
 /// the identification: a section-4 estimator that failed on complete channels leaves its
 /// parameter to the closed-loop fit too, and is refined narrowly (a known limit).
 pub(super) fn table_from_motion(c: &Campaign) -> bool {
-    let unknown = c.info.apply_known(&mut Params::trees_lab());
-    !force_recorded(c) || unknown.iter().any(|k| k.starts_with("controller."))
+    !force_recorded(c) || c.info.controller.complete().is_err()
 }
 
 /// Whether some test of `c` recorded the force.
@@ -393,8 +388,9 @@ const CANDIDATE_WIDTH: f64 = 0.5;
 
 /// Range of a baseline parameter in the baseline's refinement
 /// ([`BaselineParameter::refinement_width`]); the stiffness's and the unknown
-/// feed-forward's and delta-P gain's are absolute ([`stiffness_range`], [`gain_range`]). With no spool to pin the valve its dynamics are as free as in
-/// the candidates' fits, and so are the table's parameters when they came from the motion
+/// feed-forward's and delta-P gain's are absolute ([`stiffness_range`], [`gain_range`]).
+/// With no spool to pin the valve its dynamics are as free as in the candidates' fits,
+/// and so are the table's parameters when they came from the motion
 /// ([`table_from_motion`]): narrower, the baseline stays where the closed-loop fit's
 /// excerpts and estimation tests left it, and every candidate, free to move them, then
 /// "gains" by refining the baseline (a deadband of 3e-5 was named on a clean table).
@@ -429,7 +425,8 @@ pub(super) struct Refined {
 /// parameters of [`refined_for`] (the table mass held where it is only a scale, the gains
 /// nobody gave freed), [`REFINED_FRICTION`] and [`REFINED_SPRING`] (these two only with a
 /// force channel) and the valve dynamics within their refinement ranges, and, with
-/// `effect`, that effect's parameters from `theta0` (held, in `p0`, for an effect [`Effect::fitted_on_score`]) within their
+/// `effect`, that effect's parameters from `theta0` (held, in `p0`, for an effect
+/// [`Effect::fitted_on_score`]) within their
 /// bounds for the table `table`. The iterations are capped at `iterations`: a baseline
 /// that lacks an effect does not converge and need not.
 pub(super) fn refine_output_error(

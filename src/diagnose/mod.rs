@@ -158,7 +158,7 @@ pub fn diagnose(
         return Err(why);
     }
     Ok(pipeline::diagnose_with(
-        &screened.compared(),
+        screened.compared(),
         id,
         effort,
         progress,

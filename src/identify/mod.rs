@@ -324,14 +324,14 @@ pub fn identify_screened_with(s: &Screening, scope: Scope) -> Identification {
     };
     // the model is compared with the campaign without the set-aside displacements
     let compared = s.compared();
-    let closed_loop = closed_loop(&compared, &p, known, &unknown_inputs)
+    let closed_loop = closed_loop(compared, &p, known, &unknown_inputs)
         .and_then(|r| r.map_err(|e| note(Err(e))).ok());
     if let Some(cl) = &closed_loop {
         p = cl.params;
     }
     let comparison = match (&closed_loop, scope) {
         (Some(cl), _) => cl.fits.clone(),
-        (None, Scope::Complete) => compare_all(&compared, &p),
+        (None, Scope::Complete) => compare_all(compared, &p),
         (None, Scope::Parameters) => Vec::new(),
     };
     // the segments of the random tests' spectra, at the rate of the first one used (a
