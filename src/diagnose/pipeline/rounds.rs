@@ -128,7 +128,6 @@ impl<'a> Diagnoser<'a> {
         effort: Effort,
         progress: Option<Progress<'a>>,
     ) -> (Self, Servovalve, Vec<String>) {
-        let noise = estimate_noise(c);
         let mut base: Params = id.params;
         let rated: Vec<(&Record, f64)> = (0..c.records.len())
             .map(|i| (&c.records[i], c.sample_rate_of(i)))
@@ -136,6 +135,7 @@ impl<'a> Diagnoser<'a> {
         if let Some(v) = refine_servovalve(&base.servovalve, &rated, |n| Part::Fit.range(n)) {
             base.servovalve = v;
         }
+        let noise = estimate_noise(c).with_unrecorded_lvdt(&base, c);
         let tests: Vec<usize> = (0..c.info.tests.len()).collect();
         let (testable, not_testable): (Vec<_>, Vec<_>) = EFFECTS
             .into_iter()

@@ -26,6 +26,7 @@ mod prediction;
 mod run;
 mod scoring;
 mod spectral;
+mod unrecorded;
 mod whitening;
 
 pub use channels::*;

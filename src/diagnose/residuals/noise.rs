@@ -2,6 +2,7 @@
 //! high-frequency content), never from a generator's settings.
 
 use super::channels::{Channel, PerChannel};
+use crate::campaign::provenance::Source;
 use crate::campaign::Campaign;
 use crate::SensorNoise;
 use rand::SeedableRng;
@@ -91,6 +92,44 @@ impl NoiseFloor {
     }
 }
 
+/// [`NoiseFloor::method`]: the floor from the rest segments.
+const FROM_REST: &str = "floor from the rest segments (zero reference) at the start of the tests; sensor noise from the high-frequency content";
+
+/// [`NoiseFloor::method`]: no rest segment in any test.
+const FROM_HIGH_FREQUENCIES: &str =
+    "floor and sensor noise from the high-frequency content (fourth difference; no rest segment)";
+
+/// Samples at rest at the start of test `i`: while every reference the laboratory
+/// recorded holds its first value exactly (a controller's command at rest is a constant;
+/// a reference computed here from the recorded one is skipped, since its spectral
+/// derivatives or integrals ring about rest). A reference recorded through an ADC, noisy
+/// at rest, gives no rest segment, and the floor comes from the high frequencies.
+pub(super) fn rest_samples(c: &Campaign, i: usize) -> usize {
+    let r = &c.records[i];
+    let computed = |name: &str| {
+        c.sources
+            .get(&c.info.tests[i].name)
+            .and_then(|s| s.of(name))
+            .is_some_and(|s| matches!(s, Source::Computed { .. }))
+    };
+    let recorded: Vec<&[f64]> = [
+        ("ref_displacement_m", &r.ref_displacement_m),
+        ("ref_velocity_m_s", &r.ref_velocity_m_s),
+        ("ref_acceleration_m_s2", &r.ref_acceleration_m_s2),
+    ]
+    .into_iter()
+    .filter(|(name, _)| !computed(name))
+    .map(|(_, x)| x.as_slice())
+    .collect();
+    (0..r.len())
+        .take_while(|&k| recorded.iter().all(|x| x[k] == x[0]))
+        .count()
+}
+
+/// Rest samples a test needs before its rest segment counts: 1/8 s at 512 Hz, several
+/// periods of the oil-column chatter the floor holds.
+pub(super) const MIN_REST_SAMPLES: usize = 64;
+
 pub(super) fn std_dev(x: &[f64]) -> f64 {
     let n = x.len().max(1) as f64;
     let m = x.iter().sum::<f64>() / n;
@@ -141,20 +180,14 @@ pub fn estimate_noise(c: &Campaign) -> NoiseFloor {
     use Channel::*;
     let mut rest_est: PerChannel<Vec<f64>> = Default::default();
     let mut hf_est: PerChannel<Vec<f64>> = Default::default();
-    for r in &c.records {
-        let rest = (0..r.len())
-            .take_while(|&k| {
-                r.ref_displacement_m[k] == 0.0
-                    && r.ref_velocity_m_s[k] == 0.0
-                    && r.ref_acceleration_m_s2[k] == 0.0
-            })
-            .count();
+    for (i, r) in c.records.iter().enumerate() {
+        let rest = rest_samples(c, i);
         for ch in Channel::ALL {
             if let Some(m) = ch.measured(r) {
                 if sensor_lower_bound(ch).is_some() {
                     hf_est[ch].push(fourth_difference_rms(m));
                 }
-                if rest >= 64 {
+                if rest >= MIN_REST_SAMPLES {
                     rest_est[ch].push(std_dev(&m[..rest]));
                 }
             }
@@ -162,11 +195,12 @@ pub fn estimate_noise(c: &Campaign) -> NoiseFloor {
     }
     let hf = hf_est.map(median);
     let rest = rest_est.map(median);
-    let have_rest = rest[Displacement].is_finite();
+    // every recorded channel has its rest segments where any has (one reference)
+    let have_rest = Channel::ALL.iter().any(|&ch| rest[ch].is_finite());
     let method = if have_rest {
-        "floor from the rest segments (zero reference) at the start of the tests; sensor noise from the high-frequency content"
+        FROM_REST
     } else {
-        "floor and sensor noise from the high-frequency content (fourth difference; no rest segment)"
+        FROM_HIGH_FREQUENCIES
     };
     // NaN where no test recorded the sensor
     let sensor = PerChannel::from_fn(|ch| match sensor_lower_bound(ch) {
@@ -175,7 +209,7 @@ pub fn estimate_noise(c: &Campaign) -> NoiseFloor {
     });
     // the floor is never below the sensor noise (the command's: the loop's response to it)
     let floor = |ch: Channel, below: f64| {
-        if have_rest && rest[ch].is_finite() {
+        if rest[ch].is_finite() {
             rest[ch].max(below)
         } else {
             below
@@ -201,5 +235,45 @@ pub fn estimate_noise(c: &Campaign) -> NoiseFloor {
             spool: sensor[Spool],
         },
         method,
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::campaign::provenance::{ChannelSource, Sources};
+    use crate::campaign::synth::{synthesise, SynthOptions, REST_S, SAMPLE_RATE_HZ};
+    use crate::campaign::Control;
+
+    /// A test's rest segment is where its recorded references hold their first value:
+    /// derivatives computed here ring about rest and do not end it, and a rest at an
+    /// offset counts; the floor then comes from the rest segments.
+    #[test]
+    fn the_rest_segment_is_read_off_the_recorded_references() {
+        let opts = SynthOptions {
+            random_duration_s: 2.0,
+            tests: Some(vec!["R1".into()]),
+            ..SynthOptions::default()
+        };
+        let mut c = synthesise(&crate::params::Params::trees_lab(), &opts, None);
+        assert_eq!(c.info.tests[0].control, Control::Displacement);
+        let rest = (REST_S * SAMPLE_RATE_HZ) as usize;
+        assert!(rest_samples(&c, 0) >= rest);
+        let r = &mut c.records[0];
+        r.ref_displacement_m.iter_mut().for_each(|x| *x += 0.01);
+        r.ref_velocity_m_s[1] = 1e-9;
+        assert_eq!(rest_samples(&c, 0), 1, "an uncomputed velocity that moves");
+        let sources = Sources {
+            channels: ["ref_velocity_m_s", "ref_acceleration_m_s2"]
+                .map(|ch| ChannelSource {
+                    channel: ch.into(),
+                    source: Source::computed_reference(Control::Displacement, ch),
+                })
+                .into(),
+            unread_columns: Vec::new(),
+        };
+        c.sources.insert(c.info.tests[0].name.clone(), sources);
+        assert!(rest_samples(&c, 0) >= rest);
+        assert_eq!(estimate_noise(&c).method, FROM_REST);
     }
 }

@@ -55,14 +55,7 @@ pub fn simulate_test_with(
     part: Part,
     noise: Option<&[SensorNoise]>,
 ) -> TestRun {
-    let mut q = *p;
-    // the gains the campaign gives (the test's own over the campaign's); a gain it does
-    // not give is `p`'s: the closed-loop fit's when the campaign left it unknown
-    let spec = &c.info.tests[i];
-    q.controller = spec
-        .controller
-        .over(&c.info.controller)
-        .apply(&p.controller);
+    let q = with_test_gains(p, c, i);
     let inputs = c.records[i].inputs();
     let end = part.range(inputs.len()).end;
     let run = simulate_run_with(
@@ -87,6 +80,18 @@ pub fn simulate_test_with(
         readings,
         samples,
     })
+}
+
+/// `p` with test `i`'s controller gains: the ones the campaign gives (the test's own over
+/// the campaign's); a gain it does not give is `p`'s, the closed-loop fit's when the
+/// campaign left it unknown.
+pub fn with_test_gains(p: &Params, c: &Campaign, i: usize) -> Params {
+    let mut q = *p;
+    q.controller = c.info.tests[i]
+        .controller
+        .over(&c.info.controller)
+        .apply(&p.controller);
+    q
 }
 
 /// Largest RK4 sub-step of the diagnosis' simulations: 1/1536 s, twice the solver's
