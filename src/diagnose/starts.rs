@@ -171,14 +171,32 @@ pub(super) fn starts(
 /// highest peaks of `|F/a - M|` (the measured modes), then where `F/a` departs most from
 /// `base`'s table and modes relative to them. At each, the mass whose resonance peak has
 /// the departure's height (`2 zeta` times it) and the mode-1 spread of masses. First, all
-/// modes afresh at the highest measured peaks. None without a random test to read.
+/// modes afresh at the highest measured peaks. Without a force channel, the new mode at
+/// each frequency of the first mode's blind grid away from the modes so far.
 fn higher_mode_starts(c: &Campaign, base: &Params) -> Vec<Vec<f64>> {
-    let Some((f, h)) = apparent_mass(c) else {
-        return Vec::new();
-    };
     let s = &base.specimen;
     let modes = s.modes();
     let table = base.table.mass_kg;
+    let fitted_hz: Vec<f64> = modes.iter().map(|m| m.frequency_hz).collect();
+    let fitted = modes
+        .iter()
+        .flat_map(|m| [m.mass_kg, m.frequency_hz, m.damping_ratio]);
+    let Some((f, h)) = apparent_mass(c) else {
+        // without the force the mode-1 blind grid away from the modes so far: the motion's
+        // own departure from them peaks at the oil column, where any bias shows, not at a
+        // missing mode (a 3-Hz mode of 8 t on the 41-t table departs by 3 % in a 1-Hz
+        // bin, the oil column by 6 %)
+        return resonance_grid(
+            table,
+            &grid::SPECIMEN_BLIND_FREQUENCIES_HZ,
+            &grid::SPECIMEN_BLIND_MASS_RATIOS,
+            grid::SPECIMEN_DAMPING,
+        )
+        .into_iter()
+        .filter(|new| apart(new[1], &fitted_hz))
+        .map(|new| fitted.clone().chain(new).collect())
+        .collect();
+    };
     let modelled = |f_hz: f64| {
         std::iter::once(s.oscillator())
             .chain(s.higher_oscillators())
@@ -186,7 +204,6 @@ fn higher_mode_starts(c: &Campaign, base: &Params) -> Vec<Vec<f64>> {
             .sum::<Complex64>()
             + table
     };
-    let fitted_hz: Vec<f64> = modes.iter().map(|m| m.frequency_hz).collect();
     let away = |k: &usize| apart(f[*k], &fitted_hz);
     let departure = |k: usize| (h[k] - modelled(f[k])).norm();
     let height: Vec<f64> = h.iter().map(|h| (h - table).norm()).collect();
@@ -204,9 +221,6 @@ fn higher_mode_starts(c: &Campaign, base: &Params) -> Vec<Vec<f64>> {
         .iter()
         .flat_map(|&k| [2.0 * z * height[k], f[k], z])
         .collect();
-    let fitted = modes
-        .iter()
-        .flat_map(|m| [m.mass_kg, m.frequency_hz, m.damping_ratio]);
     (highest.len() == modes.len() + 1)
         .then_some(afresh)
         .into_iter()
