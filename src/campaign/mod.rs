@@ -455,6 +455,15 @@ impl Campaign {
         self.info.sample_rate_for(spec)
     }
 
+    /// Whether `channel` of test `test` was computed here from the recorded reference (its
+    /// derivative or integral, [`provenance::Source::Computed`]) rather than read.
+    pub fn computed_here(&self, test: &str, channel: &str) -> bool {
+        self.sources
+            .get(test)
+            .and_then(|s| s.of(channel))
+            .is_some_and(|s| matches!(s, provenance::Source::Computed { .. }))
+    }
+
     /// The sample rate of the `i`-th test (and record), Hz; the campaign's when `i` is
     /// out of range.
     pub fn sample_rate_of(&self, i: usize) -> f64 {

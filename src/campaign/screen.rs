@@ -164,11 +164,7 @@ const SET_ASIDE_DISPLACEMENT: &str = "the test is under acceleration control and
 /// compared with the model; section 4, which reads the measured channels against each
 /// other, keeps it.
 fn displacement_follows_unrecorded_reference(c: &Campaign, spec: &TestSpec, rec: &Record) -> bool {
-    let integrated = c
-        .sources
-        .get(&spec.name)
-        .and_then(|s| s.of("ref_displacement_m"))
-        .is_some_and(|s| matches!(s, super::provenance::Source::Computed { .. }));
+    let integrated = c.computed_here(&spec.name, "ref_displacement_m");
     let under_acceleration = spec.control == super::Control::Acceleration;
     let both = rec.acceleration_m_s2.is_some() && rec.displacement_m.is_some();
     integrated && under_acceleration && both

@@ -9,7 +9,9 @@
 //!    on the fitting halves: the valve on the spool channel alone (blind to the flow
 //!    effects), then mass, bulk modulus, leakage and friction amplitude on every channel.
 //! 2. Noise from the data ([`residuals::estimate_noise`]): the floor from the rest
-//!    segments, the white sensor noise from the high-frequency content.
+//!    segments, the white sensor noise from the high-frequency content; an LVDT nobody
+//!    recorded, from the acceleration at rest through the baseline's loop
+//!    ([`residuals::NoiseFloor::with_unrecorded_lvdt`]).
 //! 3. Residuals per test and channel in noise units (the heat map), and the predictive
 //!    score of every model on the held-out halves ([`residuals`]): each model is run
 //!    noise-free and with seeded in-loop sensor noise, so a model whose response the

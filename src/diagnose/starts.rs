@@ -95,12 +95,7 @@ pub(super) fn starts(
         Effect::Specimen => {
             // the specimen's resonance is the largest deviation of F/a from a rigid mass
             let Some((f, h)) = apparent_mass(c) else {
-                return resonance_grid(
-                    m,
-                    &grid::SPECIMEN_BLIND_FREQUENCIES_HZ,
-                    &grid::SPECIMEN_BLIND_MASS_RATIOS,
-                    grid::SPECIMEN_DAMPING,
-                );
+                return specimen_blind_grid(m);
             };
             let k = (0..f.len())
                 .max_by(|&a, &b| (h[a] - m).norm().total_cmp(&(h[b] - m).norm()))
@@ -171,8 +166,9 @@ pub(super) fn starts(
 /// highest peaks of `|F/a - M|` (the measured modes), then where `F/a` departs most from
 /// `base`'s table and modes relative to them. At each, the mass whose resonance peak has
 /// the departure's height (`2 zeta` times it) and the mode-1 spread of masses. First, all
-/// modes afresh at the highest measured peaks. Without a force channel, the new mode at
-/// each frequency of the first mode's blind grid away from the modes so far.
+/// modes afresh at the highest measured peaks. Without an apparent mass (no force, or no
+/// random test with force and acceleration to read it from), the new mode at each
+/// frequency of the first mode's blind grid away from the modes so far.
 fn higher_mode_starts(c: &Campaign, base: &Params) -> Vec<Vec<f64>> {
     let s = &base.specimen;
     let modes = s.modes();
@@ -182,20 +178,15 @@ fn higher_mode_starts(c: &Campaign, base: &Params) -> Vec<Vec<f64>> {
         .iter()
         .flat_map(|m| [m.mass_kg, m.frequency_hz, m.damping_ratio]);
     let Some((f, h)) = apparent_mass(c) else {
-        // without the force the mode-1 blind grid away from the modes so far: the motion's
+        // without the apparent mass the mode-1 blind grid away from the modes so far: the motion's
         // own departure from them peaks at the oil column, where any bias shows, not at a
         // missing mode (a 3-Hz mode of 8 t on the 41-t table departs by 3 % in a 1-Hz
         // bin, the oil column by 6 %)
-        return resonance_grid(
-            table,
-            &grid::SPECIMEN_BLIND_FREQUENCIES_HZ,
-            &grid::SPECIMEN_BLIND_MASS_RATIOS,
-            grid::SPECIMEN_DAMPING,
-        )
-        .into_iter()
-        .filter(|new| apart(new[1], &fitted_hz))
-        .map(|new| fitted.clone().chain(new).collect())
-        .collect();
+        return specimen_blind_grid(table)
+            .into_iter()
+            .filter(|new| apart(new[1], &fitted_hz))
+            .map(|new| fitted.clone().chain(new).collect())
+            .collect();
     };
     let modelled = |f_hz: f64| {
         std::iter::once(s.oscillator())
@@ -236,6 +227,17 @@ fn higher_mode_starts(c: &Campaign, base: &Params) -> Vec<Vec<f64>> {
                 .map(|(m, fk)| fitted.clone().chain([m, fk, z]).collect()),
         )
         .collect()
+}
+
+/// The specimen's blind grid ([`grid::SPECIMEN_BLIND_FREQUENCIES_HZ`]) on a table of
+/// `table_mass_kg`.
+fn specimen_blind_grid(table_mass_kg: f64) -> Vec<Vec<f64>> {
+    resonance_grid(
+        table_mass_kg,
+        &grid::SPECIMEN_BLIND_FREQUENCIES_HZ,
+        &grid::SPECIMEN_BLIND_MASS_RATIOS,
+        grid::SPECIMEN_DAMPING,
+    )
 }
 
 /// A blind grid of a resonance's starts `[mass_kg, frequency_hz, damping_ratio]`: every

@@ -2,7 +2,6 @@
 //! high-frequency content), never from a generator's settings.
 
 use super::channels::{Channel, PerChannel};
-use crate::campaign::provenance::Source;
 use crate::campaign::Campaign;
 use crate::SensorNoise;
 use rand::SeedableRng;
@@ -70,30 +69,37 @@ impl NoiseFloor {
     /// Seeded sensor noise at the sensor levels for a record of `n` samples (the feedback
     /// channels only, as on the table; spec section 2).
     pub fn loop_noise(&self, n: usize, seed: u64) -> Vec<SensorNoise> {
-        let mut rng = ChaCha8Rng::seed_from_u64(seed);
-        let normal = Normal::new(0.0, 1.0).expect("unit normal");
-        // a sensor no test recorded has no noise estimate (NaN): it feeds the loop none,
-        // rather than NaN that would end every noisy run (a campaign without an
-        // accelerometer, issue 16 part 5)
-        let level = |x: f64| if x.is_finite() { x } else { 0.0 };
         let s = &self.sensor;
-        let (d, a, f) = (
-            level(s.displacement_m),
-            level(s.acceleration_m_s2),
-            level(s.force_n),
-        );
-        (0..n)
-            .map(|_| SensorNoise {
-                displacement_m: d * normal.sample(&mut rng),
-                acceleration_m_s2: a * normal.sample(&mut rng),
-                force_n: f * normal.sample(&mut rng),
-            })
-            .collect()
+        white_loop_noise([s.displacement_m, s.acceleration_m_s2, s.force_n], n, seed)
     }
 }
 
-/// [`NoiseFloor::method`]: the floor from the rest segments.
-const FROM_REST: &str = "floor from the rest segments (zero reference) at the start of the tests; sensor noise from the high-frequency content";
+/// `n` samples of seeded white noise of RMS `[LVDT, accelerometer, force]` on the
+/// feedback sensors. A level that is not finite (a sensor no test recorded has no noise
+/// estimate) feeds the loop none, rather than NaN that would end every noisy run (a
+/// campaign without an accelerometer, issue 16 part 5).
+pub(super) fn white_loop_noise(rms: [f64; 3], n: usize, seed: u64) -> Vec<SensorNoise> {
+    let mut rng = ChaCha8Rng::seed_from_u64(seed);
+    let normal = Normal::new(0.0, 1.0).expect("unit normal");
+    let [d, a, f] = rms.map(|x| if x.is_finite() { x } else { 0.0 });
+    (0..n)
+        .map(|_| SensorNoise {
+            displacement_m: d * normal.sample(&mut rng),
+            acceleration_m_s2: a * normal.sample(&mut rng),
+            force_n: f * normal.sample(&mut rng),
+        })
+        .collect()
+}
+
+/// [`NoiseFloor::method`]: the floor from the rest segments (a macro, so that the text
+/// with the LVDT's inference can extend it: [`super::unrecorded`]).
+macro_rules! from_rest {
+    () => {
+        "floor from the rest segments (the recorded references held) at the start of the tests; sensor noise from the high-frequency content"
+    };
+}
+pub(super) use from_rest;
+const FROM_REST: &str = from_rest!();
 
 /// [`NoiseFloor::method`]: no rest segment in any test.
 const FROM_HIGH_FREQUENCIES: &str =
@@ -106,12 +112,7 @@ const FROM_HIGH_FREQUENCIES: &str =
 /// at rest, gives no rest segment, and the floor comes from the high frequencies.
 pub(super) fn rest_samples(c: &Campaign, i: usize) -> usize {
     let r = &c.records[i];
-    let computed = |name: &str| {
-        c.sources
-            .get(&c.info.tests[i].name)
-            .and_then(|s| s.of(name))
-            .is_some_and(|s| matches!(s, Source::Computed { .. }))
-    };
+    let computed = |name: &str| c.computed_here(&c.info.tests[i].name, name);
     let recorded: Vec<&[f64]> = [
         ("ref_displacement_m", &r.ref_displacement_m),
         ("ref_velocity_m_s", &r.ref_velocity_m_s),
@@ -126,8 +127,9 @@ pub(super) fn rest_samples(c: &Campaign, i: usize) -> usize {
         .count()
 }
 
-/// Rest samples a test needs before its rest segment counts: 1/8 s at 512 Hz, several
-/// periods of the oil-column chatter the floor holds.
+/// Rest samples a test needs before its rest segment counts: 1/8 s at 512 Hz, one or two
+/// periods of the oil-column chatter the floor holds, the least that gives its variance
+/// (a synthetic rest is a second long).
 pub(super) const MIN_REST_SAMPLES: usize = 64;
 
 pub(super) fn std_dev(x: &[f64]) -> f64 {
@@ -171,11 +173,11 @@ fn sensor_lower_bound(ch: Channel) -> Option<f64> {
     }
 }
 
-/// Noise of every channel, from the data only. The floor: the rest segments (zero
-/// reference) at the start of the tests, median over tests. The sensor noise: the
-/// high-frequency content (fourth difference, median over tests), which the loop's
-/// response (below 50 Hz) does not reach. Without a rest segment of 64 samples or more
-/// in any test, the floor is the sensor noise (and the command's from the gains).
+/// Noise of every channel, from the data only. The floor: the rest segments at the start
+/// of the tests ([`rest_samples`], at least [`MIN_REST_SAMPLES`]), median over tests.
+/// The sensor noise: the high-frequency content (fourth difference, median over tests),
+/// which the loop's response (below 50 Hz) does not reach. A channel without a rest
+/// segment in any test has the sensor noise as its floor (the command's from the gains).
 pub fn estimate_noise(c: &Campaign) -> NoiseFloor {
     use Channel::*;
     let mut rest_est: PerChannel<Vec<f64>> = Default::default();
@@ -241,7 +243,7 @@ pub fn estimate_noise(c: &Campaign) -> NoiseFloor {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::campaign::provenance::{ChannelSource, Sources};
+    use crate::campaign::provenance::{ChannelSource, Source, Sources};
     use crate::campaign::synth::{synthesise, SynthOptions, REST_S, SAMPLE_RATE_HZ};
     use crate::campaign::Control;
 

@@ -6,15 +6,14 @@
 //! [`super::predict`] then feed back as on the table (without it they predict a spread
 //! several times too small around the oil column, and every test looks missed there).
 
-use super::noise::{median, rest_samples, std_dev, NoiseFloor, MIN_REST_SAMPLES};
+use super::noise::{
+    from_rest, median, rest_samples, std_dev, white_loop_noise, NoiseFloor, MIN_REST_SAMPLES,
+};
 use super::run::{with_test_gains, DIAGNOSIS_SUBSTEP_S};
 use crate::campaign::{Campaign, Measured};
 use crate::params::Params;
 use crate::solver::{simulate_run_with, Checks};
-use crate::{Model, SensorNoise};
-use rand::SeedableRng;
-use rand_chacha::ChaCha8Rng;
-use rand_distr::{Distribution, Normal};
+use crate::{Inputs, Model};
 use rayon::prelude::*;
 
 /// LVDT noise of the first probe run, m: a typical LVDT's (a micrometre on a stroke of
@@ -36,84 +35,93 @@ const PROBE_SEED: u64 = 0x1d7_0153;
 impl NoiseFloor {
     /// This floor with the LVDT's noise inferred from the acceleration at rest under `p`
     /// when no test recorded the displacement but some recorded the acceleration at rest;
-    /// unchanged otherwise (and where the loop shows no response to the LVDT).
+    /// unchanged otherwise (and where the loop shows no response to the LVDT). The noise
+    /// of other feedback sensors nobody recorded (the delta-P force's, where a gain reads
+    /// it) is in the acceleration too, and the LVDT's estimate takes it in.
     pub fn with_unrecorded_lvdt(mut self, p: &Params, c: &Campaign) -> NoiseFloor {
         let recorded = |m| c.records.iter().any(|r| r.measured(m).is_some());
         if recorded(Measured::Displacement) || !self.acceleration_m_s2.is_finite() {
             return self;
         }
-        let mut level = FIRST_PROBE_M;
+        let rests: Vec<RestExcess> = (0..c.records.len())
+            .into_par_iter()
+            .filter_map(|i| RestExcess::of_test(p, c, i, &self))
+            .collect();
+        let mut level = None;
         for _ in 0..PROBES {
-            let estimates: Vec<f64> = (0..c.records.len())
-                .into_par_iter()
-                .filter_map(|i| lvdt_noise_of_test(p, c, i, level, &self))
-                .collect();
-            let estimate = median(estimates);
+            let probe_m = level.unwrap_or(FIRST_PROBE_M);
+            let estimate = median(
+                rests
+                    .par_iter()
+                    .filter_map(|r| r.lvdt_noise(p, c, probe_m))
+                    .collect(),
+            );
             if !(estimate.is_finite() && estimate > 0.0) {
-                return self;
+                break;
             }
-            level = estimate;
+            level = Some(estimate);
         }
-        self.sensor.displacement_m = level;
-        self.method = FROM_REST_WITH_LVDT;
+        if let Some(level) = level {
+            self.sensor.displacement_m = level;
+            self.method = FROM_REST_WITH_LVDT;
+        }
         self
     }
 }
 
 /// [`NoiseFloor::method`] when the LVDT's noise was inferred.
-const FROM_REST_WITH_LVDT: &str = "floor from the rest segments (zero reference) at the start of the tests; sensor noise from the high-frequency content; the LVDT's noise (not recorded) from the acceleration at rest over the baseline loop's response to it";
+const FROM_REST_WITH_LVDT: &str = concat!(
+    from_rest!(),
+    "; the LVDT's noise (not recorded) from the acceleration at rest over the baseline loop's response to it"
+);
 
-/// The LVDT noise RMS that explains test `i`'s acceleration at rest under `p`: the
-/// measured variance less what the other sensors' noise makes (the accelerometer's own
-/// and, through the loop, the fed-back acceleration and force), over the acceleration
-/// variance per unit LVDT variance of a probe run with LVDT noise `probe_m` alone. `None`
-/// without an acceleration rest segment, when a probe run stops or shows no response.
-fn lvdt_noise_of_test(
-    p: &Params,
-    c: &Campaign,
-    i: usize,
-    probe_m: f64,
-    noise: &NoiseFloor,
-) -> Option<f64> {
-    let r = &c.records[i];
-    let acceleration = r.measured(Measured::Acceleration)?;
-    let rest = rest_samples(c, i);
-    if rest < MIN_REST_SAMPLES {
-        return None;
+/// A test's acceleration variance at rest that the recorded sensors' noise leaves
+/// unexplained: the measured variance less what the accelerometer's own noise and, through
+/// the loop, the fed-back acceleration and force noise make.
+struct RestExcess {
+    test: usize,
+    variance_m2_s4: f64,
+}
+
+impl RestExcess {
+    /// Test `i`'s under `p`; `None` without an acceleration rest segment or when the
+    /// probe run stops.
+    fn of_test(p: &Params, c: &Campaign, i: usize, noise: &NoiseFloor) -> Option<RestExcess> {
+        let acceleration = c.records[i].measured(Measured::Acceleration)?;
+        let rest = rest_samples(c, i);
+        if rest < MIN_REST_SAMPLES {
+            return None;
+        }
+        let measured = std_dev(&acceleration[..rest]).powi(2);
+        let s = &noise.sensor;
+        let others = rest_acceleration_variance(p, c, i, [0.0, s.acceleration_m_s2, s.force_n])?;
+        Some(RestExcess {
+            test: i,
+            variance_m2_s4: measured - others,
+        })
     }
-    let measured = std_dev(&acceleration[..rest]).powi(2);
-    let level = |x: f64| if x.is_finite() { x } else { 0.0 };
-    let others = rest_acceleration_variance(
-        p,
-        c,
-        i,
-        [
-            0.0,
-            level(noise.sensor.acceleration_m_s2),
-            level(noise.sensor.force_n),
-        ],
-    )?;
-    let per_unit = rest_acceleration_variance(p, c, i, [probe_m, 0.0, 0.0])? / probe_m.powi(2);
-    let excess = measured - others;
-    (per_unit > 0.0 && excess > 0.0).then(|| (excess / per_unit).sqrt())
+
+    /// The LVDT noise RMS that explains the excess: over the acceleration variance per unit
+    /// LVDT variance of a probe run with LVDT noise `probe_m` alone. `None` when the probe
+    /// stops or shows no response, or nothing is in excess.
+    fn lvdt_noise(&self, p: &Params, c: &Campaign, probe_m: f64) -> Option<f64> {
+        let per_unit =
+            rest_acceleration_variance(p, c, self.test, [probe_m, 0.0, 0.0])? / probe_m.powi(2);
+        (per_unit > 0.0 && self.variance_m2_s4 > 0.0)
+            .then(|| (self.variance_m2_s4 / per_unit).sqrt())
+    }
 }
 
 /// The variance of test `i`'s acceleration reading (simulated plus the accelerometer's
-/// noise) at rest under `p` ([`PROBE_S`] of its first input), with white noise of RMS
-/// `[LVDT, accelerometer, force]` fed back; `None` when the run stops.
+/// noise) at rest under `p` and the test's gains ([`PROBE_S`] at a zero reference: the
+/// model starts at the centre of the stroke, and a test resting at an offset would start
+/// with a step), with white noise of RMS `[LVDT, accelerometer, force]` fed back; `None`
+/// when the run stops.
 fn rest_acceleration_variance(p: &Params, c: &Campaign, i: usize, rms: [f64; 3]) -> Option<f64> {
     let fs = c.sample_rate_of(i);
     let samples = (PROBE_S * fs).ceil() as usize;
-    let at_rest = vec![*c.records[i].inputs().first()?; samples];
-    let mut rng = ChaCha8Rng::seed_from_u64(PROBE_SEED ^ i as u64);
-    let normal = Normal::new(0.0, 1.0).ok()?;
-    let draw: Vec<SensorNoise> = (0..samples)
-        .map(|_| SensorNoise {
-            displacement_m: rms[0] * normal.sample(&mut rng),
-            acceleration_m_s2: rms[1] * normal.sample(&mut rng),
-            force_n: rms[2] * normal.sample(&mut rng),
-        })
-        .collect();
+    let at_rest = vec![Inputs::default(); samples];
+    let draw = white_loop_noise(rms, samples, PROBE_SEED ^ i as u64);
     let run = simulate_run_with(
         &Model::new(&with_test_gains(p, c, i)),
         &at_rest,
