@@ -130,7 +130,14 @@ pub(super) fn rest_samples(c: &Campaign, i: usize) -> usize {
 /// Rest samples a test needs before its rest segment counts: 1/8 s at 512 Hz, one or two
 /// periods of the oil-column chatter the floor holds, the least that gives its variance
 /// (a synthetic rest is a second long).
-pub(super) const MIN_REST_SAMPLES: usize = 64;
+const MIN_REST_SAMPLES: usize = 64;
+
+/// Test `i`'s rest segment ([`rest_samples`]) where it is long enough to count
+/// ([`MIN_REST_SAMPLES`]): the floor's and the unrecorded LVDT's source.
+pub(super) fn rest_segment(c: &Campaign, i: usize) -> Option<std::ops::Range<usize>> {
+    let rest = rest_samples(c, i);
+    (rest >= MIN_REST_SAMPLES).then_some(0..rest)
+}
 
 pub(super) fn std_dev(x: &[f64]) -> f64 {
     let n = x.len().max(1) as f64;
@@ -174,7 +181,7 @@ fn sensor_lower_bound(ch: Channel) -> Option<f64> {
 }
 
 /// Noise of every channel, from the data only. The floor: the rest segments at the start
-/// of the tests ([`rest_samples`], at least [`MIN_REST_SAMPLES`]), median over tests.
+/// of the tests ([`rest_segment`]), median over tests.
 /// The sensor noise: the high-frequency content (fourth difference, median over tests),
 /// which the loop's response (below 50 Hz) does not reach. A channel without a rest
 /// segment in any test has the sensor noise as its floor (the command's from the gains).
@@ -183,14 +190,14 @@ pub fn estimate_noise(c: &Campaign) -> NoiseFloor {
     let mut rest_est: PerChannel<Vec<f64>> = Default::default();
     let mut hf_est: PerChannel<Vec<f64>> = Default::default();
     for (i, r) in c.records.iter().enumerate() {
-        let rest = rest_samples(c, i);
+        let rest = rest_segment(c, i);
         for ch in Channel::ALL {
             if let Some(m) = ch.measured(r) {
                 if sensor_lower_bound(ch).is_some() {
                     hf_est[ch].push(fourth_difference_rms(m));
                 }
-                if rest >= MIN_REST_SAMPLES {
-                    rest_est[ch].push(std_dev(&m[..rest]));
+                if let Some(rest) = rest.clone() {
+                    rest_est[ch].push(std_dev(&m[rest]));
                 }
             }
         }

@@ -6,9 +6,7 @@
 //! [`super::predict`] then feed back as on the table (without it they predict a spread
 //! several times too small around the oil column, and every test looks missed there).
 
-use super::noise::{
-    from_rest, median, rest_samples, std_dev, white_loop_noise, NoiseFloor, MIN_REST_SAMPLES,
-};
+use super::noise::{from_rest, median, rest_segment, std_dev, white_loop_noise, NoiseFloor};
 use super::run::{with_test_gains, DIAGNOSIS_SUBSTEP_S};
 use crate::campaign::{Campaign, Measured};
 use crate::params::Params;
@@ -88,11 +86,7 @@ impl RestExcess {
     /// probe run stops.
     fn of_test(p: &Params, c: &Campaign, i: usize, noise: &NoiseFloor) -> Option<RestExcess> {
         let acceleration = c.records[i].measured(Measured::Acceleration)?;
-        let rest = rest_samples(c, i);
-        if rest < MIN_REST_SAMPLES {
-            return None;
-        }
-        let measured = std_dev(&acceleration[..rest]).powi(2);
+        let measured = std_dev(&acceleration[rest_segment(c, i)?]).powi(2);
         let s = &noise.sensor;
         let others = rest_acceleration_variance(p, c, i, [0.0, s.acceleration_m_s2, s.force_n])?;
         Some(RestExcess {
