@@ -424,15 +424,16 @@ pub(super) struct Refined {
 /// Output-error refinement of `p0` on the fitting halves of `tests`: the baseline
 /// parameters of [`refined_for`] (the table mass held where it is only a scale, the gains
 /// nobody gave freed), [`REFINED_FRICTION`] and [`REFINED_SPRING`] (these two only with a
-/// force channel) and the valve dynamics within their refinement ranges, and, with
-/// `effect`, that effect's parameters from `theta0` (held, in `p0`, for an effect
-/// [`Effect::fitted_on_score`]) within their
-/// bounds for the table `table`. The iterations are capped at `iterations`: a baseline
-/// that lacks an effect does not converge and need not.
+/// force channel) and the valve dynamics within their refinement ranges, and every effect
+/// of `effects`, its parameters from the values given (held, in `p0`, for an effect
+/// [`Effect::fitted_on_score`]) within their bounds for the table `table`. The
+/// iterations are capped at `iterations`: a baseline that lacks an effect does not
+/// converge and need not. [`Refined::effect_sigma`] and `effect_bounds` list the freed
+/// effects' parameters in the order given.
 pub(super) fn refine_output_error(
     c: &Campaign,
     p0: &Params,
-    effect: Option<(Effect, &[f64])>,
+    effects: &[(Effect, &[f64])],
     table: &Params,
     tests: &[usize],
     whitening: &Whitening,
@@ -453,16 +454,25 @@ pub(super) fn refine_output_error(
         .copied()
         .collect();
     let ranges: Vec<Range> = free.iter().map(|&w| refinement_range(p0, w, c)).collect();
-    let (e, theta_e) = match effect {
-        Some((e, t)) if !e.fitted_on_score() => (Some(e), t.to_vec()),
-        _ => (None, Vec::new()),
-    };
+    let freed: Vec<(Effect, &[f64])> = effects
+        .iter()
+        .filter(|(e, _)| !e.fitted_on_score())
+        .copied()
+        .collect();
+    let theta_e: Vec<f64> = freed.iter().flat_map(|(_, t)| t.iter().copied()).collect();
     let ne = theta_e.len();
-    let (elo, ehi) = e.map(|e| e.bounds(table)).unwrap_or_default();
+    let (mut elo, mut ehi) = (Vec::new(), Vec::new());
+    for (e, _) in &freed {
+        let (lo, hi) = e.bounds(table);
+        elo.extend(lo);
+        ehi.extend(hi);
+    }
     let assemble = |t: &[f64]| {
         let mut p = *p0;
-        if let Some(e) = e {
-            e.apply(&mut p, &t[..ne]);
+        let mut at = 0;
+        for (e, theta) in &freed {
+            e.apply(&mut p, &t[at..at + theta.len()]);
+            at += theta.len();
         }
         for (k, which) in free.iter().enumerate() {
             which.set(&mut p, t[ne + k]);
@@ -549,7 +559,7 @@ mod tests {
         let mut p0 = truth;
         p0.actuator.leakage_m3_s_pa += truth.controller.kdp * valve_flow;
         p0.controller.kdp = 0.0;
-        let r = refine_output_error(&c, &p0, None, &truth, &[0], &whitening, 20).unwrap();
+        let r = refine_output_error(&c, &p0, &[], &truth, &[0], &whitening, 20).unwrap();
         let k = r.params.controller.kdp;
         let error = k / truth.controller.kdp - 1.0;
         assert!(

@@ -378,15 +378,7 @@ pub(super) fn scored_candidate(
 ) -> Candidate {
     let p = fitted.params;
     let (select, report) = heldout_scores(&p, c, heldout_idx, noise, Some(hold));
-    let keyed = |v: &[f64]| -> BTreeMap<String, f64> {
-        e.parameters()
-            .iter()
-            .zip(v)
-            .filter(|(_, x)| x.is_finite())
-            .map(|(k, x)| (k.to_string(), *x))
-            .collect()
-    };
-    let parameters = keyed(fitted.theta);
+    let parameters = e.keyed(fitted.theta);
     // a sigma the data cannot bound stays (infinite or NaN): it is no evidence
     let sigma: BTreeMap<String, f64> = e
         .parameters()

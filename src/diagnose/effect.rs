@@ -140,6 +140,25 @@ impl Effect {
         tests_of(c, table, &self.catalogue().signature_tests)
     }
 
+    /// The catalogue effects switched on in `p`, a specimen as the variant of its modes
+    /// (a mode exists when its mass is positive, spec section 7).
+    pub(super) fn present_in(p: &Params) -> Vec<Effect> {
+        let has = |key: &str| {
+            let e = Effect::SpecimenThreeModes;
+            let k = e.parameters().iter().position(|n| *n == key);
+            k.is_some_and(|k| e.read(p)[k] > 0.0)
+        };
+        EFFECTS
+            .into_iter()
+            .filter(|e| e.catalogue().is_enabled(p))
+            .map(|e| match e {
+                Effect::Specimen if has("mode3.mass_kg") => Effect::SpecimenThreeModes,
+                Effect::Specimen if has("mode2.mass_kg") => Effect::SpecimenTwoModes,
+                e => e,
+            })
+            .collect()
+    }
+
     /// Whether its signature has no reproducible phase (stick-slip's chatter grows out of
     /// the sensor noise, the free play's bounces inside the gap are chaotic): it is fitted
     /// on the predictive score and held in output-error refinements, whose sample-wise
@@ -154,6 +173,17 @@ impl Effect {
             .parameters
             .iter()
             .map(|q| (q.read)(p))
+            .collect()
+    }
+
+    /// Its parameters `theta` by name, the non-finite ones left out (as the JSON lists
+    /// them).
+    pub(super) fn keyed(self, theta: &[f64]) -> std::collections::BTreeMap<String, f64> {
+        self.parameters()
+            .iter()
+            .zip(theta)
+            .filter(|(_, x)| x.is_finite())
+            .map(|(k, x)| (k.to_string(), *x))
             .collect()
     }
 
@@ -205,6 +235,31 @@ pub(super) fn tests_of(c: &Campaign, table: &Params, wanted: &SignatureTests) ->
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// The effects a model holds are read off its parameters, a specimen as its modes: the
+    /// polish refits each of them (an accepted cause refitted with the next).
+    #[test]
+    fn the_effects_present_are_read_off_the_parameters() {
+        let mut p = Params::default();
+        assert!(Effect::present_in(&p).is_empty());
+        p.apply_effect_spec("valve_deadband:deadband=0.01").unwrap();
+        p.apply_effect_spec("specimen:mass_kg=1e4,frequency_hz=4")
+            .unwrap();
+        assert_eq!(
+            Effect::present_in(&p),
+            [Effect::Specimen, Effect::ValveDeadband]
+        );
+        p.apply_effect_spec("specimen:mode2.mass_kg=2e3,mode2.frequency_hz=9")
+            .unwrap();
+        assert_eq!(
+            Effect::present_in(&p),
+            [Effect::SpecimenTwoModes, Effect::ValveDeadband]
+        );
+        let theta = Effect::SpecimenTwoModes.read(&p);
+        let keyed = Effect::SpecimenTwoModes.keyed(&theta);
+        assert_eq!(keyed["mode2.frequency_hz"], 9.0);
+        assert_eq!(keyed.len(), theta.len());
+    }
 
     /// Each diagnosis effect is the catalogue entry of its name (the enum's order is the
     /// catalogue's).

@@ -166,7 +166,7 @@ pub(super) fn fit_free_play(
         let Some(unbent) = refine_output_error(
             c,
             &model(&base, &best.1),
-            Some((e, &best.1[..2])),
+            &[(e, &best.1[..2])],
             &bases[0],
             fit_idx,
             whitening,

@@ -55,7 +55,7 @@ pub(super) fn fit_stick_slip(
         let Some(unbent) = refine_output_error(
             c,
             &best.2,
-            Some((e, &best.1)),
+            &[(e, &best.1)],
             base,
             fit_idx,
             whitening,

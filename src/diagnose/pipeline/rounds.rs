@@ -199,6 +199,10 @@ impl<'a> Diagnoser<'a> {
                     let (cause, extended) = self.accept(best, &current, &missed, round);
                     causes.push(cause);
                     current = extended;
+                    // the polish refitted the causes accepted before with this one
+                    for cause in &mut causes {
+                        cause.parameters = cause.effect.keyed(&cause.effect.read(&current.params));
+                    }
                 }
                 Verdict::Partial(why) => {
                     if round == 0 && unphysical(&best, table_mass_kg).is_some() {
