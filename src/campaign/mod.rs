@@ -9,6 +9,7 @@ pub mod format;
 pub mod init;
 pub mod matlab;
 pub mod provenance;
+mod rest;
 pub mod screen;
 pub mod synth;
 

@@ -82,10 +82,21 @@ pub fn text(cl: &ClosedLoopFit) -> String {
             Role::Estimation => "fitted on",
             Role::Validation => "PREDICTED",
         };
+        let ceiling = f
+            .noise_ceiling_percent
+            .map(|c| format!("  (noise at rest allows at most {c:.0} %)"))
+            .unwrap_or_default();
         let _ = writeln!(
             t,
-            "  {:<10} {:<20} {:<18} NRMSE {:.4}  fit {:6.2} %",
+            "  {:<10} {:<20} {:<18} NRMSE {:.4}  fit {:6.2} %{ceiling}",
             role, f.test, f.channel, f.nrmse, f.fit_percent
+        );
+    }
+    let limited = cl.fits.iter().filter(|f| f.noise_limited).count();
+    if limited > 0 {
+        let _ = writeln!(
+            t,
+            "  {limited} of these fits are noise-limited (the noise at rest is more than half the channel's RMS): their fit % tells of the sensors, not of the model"
         );
     }
     for s in &cl.stopped {
@@ -183,9 +194,20 @@ fn trace_section(
         .find(|f| f.test == tr.test && f.channel == tr.channel)
         .map(|f| {
             format!(
-                "NRMSE {:.4}, fit {:.2} % over the whole test (means removed); the figure shows \
-                 ten seconds from just before the test moves.",
-                f.nrmse, f.fit_percent
+                "NRMSE {:.4}, fit {:.2} % over the whole test (means removed){}; the figure \
+                 shows ten seconds from just before the test moves.",
+                f.nrmse,
+                f.fit_percent,
+                f.noise_ceiling_percent
+                    .map(|c| format!(
+                        ", where the noise at rest allows at most {c:.0} %{}",
+                        if f.noise_limited {
+                            ": noise-limited"
+                        } else {
+                            ""
+                        }
+                    ))
+                    .unwrap_or_default()
             )
         })
         .unwrap_or_default();

@@ -82,7 +82,15 @@ fn not_compared(id: &Identification, test: &str) -> String {
 /// Measured against simulated for every test that was read: NRMSE and fit % per channel,
 /// predictions marked; a test without figures says why.
 fn comparison_section(id: &Identification) -> Section {
-    let mut fits = Table::new(&["test", "channel", "role", "NRMSE", "fit %", "measured RMS"]);
+    let mut fits = Table::new(&[
+        "test",
+        "channel",
+        "role",
+        "NRMSE",
+        "fit %",
+        "noise allows %",
+        "measured RMS",
+    ]);
     for f in &id.comparison {
         fits.push(vec![
             f.test.clone(),
@@ -93,6 +101,11 @@ fn comparison_section(id: &Identification) -> Section {
             },
             format!("{:.4}", f.nrmse),
             format!("{:.2}", f.fit_percent),
+            match f.noise_ceiling_percent {
+                Some(c) if f.noise_limited => format!("{c:.0} (noise-limited)"),
+                Some(c) => format!("{c:.0}"),
+                None => "- (no rest segment)".into(),
+            },
             format!("{:.4e}", f.measured_rms),
         ]);
     }
@@ -111,7 +124,12 @@ fn comparison_section(id: &Identification) -> Section {
         "Every test simulated as it was run (its reference, its gains) with the identified \
          model; per channel NRMSE = RMS(measured - simulated) / RMS(measured) and fit % = \
          100 (1 - NRMSE), means removed (MATLAB's compare). A test the fit did not use is a \
-         prediction."
+         prediction. \"noise allows\" is the most fit % a noise-free simulation of the true \
+         table can reach with the noise the channel shows at rest (where the recorded \
+         references hold before the test moves): 100 (1 - RMS at rest / RMS). In motion \
+         the loop's response to the noise is larger still, so the true table fits lower. \
+         Below 50 % the channel is mostly noise (a slow test's acceleration) and its fit % \
+         tells of the sensors, not the model."
             .into(),
         tables,
     )

@@ -105,40 +105,6 @@ const FROM_REST: &str = from_rest!();
 const FROM_HIGH_FREQUENCIES: &str =
     "floor and sensor noise from the high-frequency content (fourth difference; no rest segment)";
 
-/// Samples at rest at the start of test `i`: while every reference the laboratory
-/// recorded holds its first value exactly (a controller's command at rest is a constant;
-/// a reference computed here from the recorded one is skipped, since its spectral
-/// derivatives or integrals ring about rest). A reference recorded through an ADC, noisy
-/// at rest, gives no rest segment, and the floor comes from the high frequencies.
-pub(super) fn rest_samples(c: &Campaign, i: usize) -> usize {
-    let r = &c.records[i];
-    let computed = |name: &str| c.computed_here(&c.info.tests[i].name, name);
-    let recorded: Vec<&[f64]> = [
-        ("ref_displacement_m", &r.ref_displacement_m),
-        ("ref_velocity_m_s", &r.ref_velocity_m_s),
-        ("ref_acceleration_m_s2", &r.ref_acceleration_m_s2),
-    ]
-    .into_iter()
-    .filter(|(name, _)| !computed(name))
-    .map(|(_, x)| x.as_slice())
-    .collect();
-    (0..r.len())
-        .take_while(|&k| recorded.iter().all(|x| x[k] == x[0]))
-        .count()
-}
-
-/// Rest samples a test needs before its rest segment counts: 1/8 s at 512 Hz, one or two
-/// periods of the oil-column chatter the floor holds, the least that gives its variance
-/// (a synthetic rest is a second long).
-const MIN_REST_SAMPLES: usize = 64;
-
-/// Test `i`'s rest segment ([`rest_samples`]) where it is long enough to count
-/// ([`MIN_REST_SAMPLES`]): the floor's and the unrecorded LVDT's source.
-pub(super) fn rest_segment(c: &Campaign, i: usize) -> Option<std::ops::Range<usize>> {
-    let rest = rest_samples(c, i);
-    (rest >= MIN_REST_SAMPLES).then_some(0..rest)
-}
-
 pub(super) fn std_dev(x: &[f64]) -> f64 {
     let n = x.len().max(1) as f64;
     let m = x.iter().sum::<f64>() / n;
@@ -181,7 +147,7 @@ fn sensor_lower_bound(ch: Channel) -> Option<f64> {
 }
 
 /// Noise of every channel, from the data only. The floor: the rest segments at the start
-/// of the tests ([`rest_segment`]), median over tests.
+/// of the tests ([`Campaign::rest_segment`]), median over tests.
 /// The sensor noise: the high-frequency content (fourth difference, median over tests),
 /// which the loop's response (below 50 Hz) does not reach. A channel without a rest
 /// segment in any test has the sensor noise as its floor (the command's from the gains).
@@ -190,7 +156,7 @@ pub fn estimate_noise(c: &Campaign) -> NoiseFloor {
     let mut rest_est: PerChannel<Vec<f64>> = Default::default();
     let mut hf_est: PerChannel<Vec<f64>> = Default::default();
     for (i, r) in c.records.iter().enumerate() {
-        let rest = rest_segment(c, i);
+        let rest = c.rest_segment(i);
         for ch in Channel::ALL {
             if let Some(m) = ch.measured(r) {
                 if sensor_lower_bound(ch).is_some() {
@@ -267,11 +233,11 @@ mod tests {
         let mut c = synthesise(&crate::params::Params::trees_lab(), &opts, None);
         assert_eq!(c.info.tests[0].control, Control::Displacement);
         let rest = (REST_S * SAMPLE_RATE_HZ) as usize;
-        assert!(rest_samples(&c, 0) >= rest);
+        assert!(c.rest_samples(0) >= rest);
         let r = &mut c.records[0];
         r.ref_displacement_m.iter_mut().for_each(|x| *x += 0.01);
         r.ref_velocity_m_s[1] = 1e-9;
-        assert_eq!(rest_samples(&c, 0), 1, "an uncomputed velocity that moves");
+        assert_eq!(c.rest_samples(0), 1, "an uncomputed velocity that moves");
         let sources = Sources {
             channels: ["ref_velocity_m_s", "ref_acceleration_m_s2"]
                 .map(|ch| ChannelSource {
@@ -282,7 +248,7 @@ mod tests {
             unread_columns: Vec::new(),
         };
         c.sources.insert(c.info.tests[0].name.clone(), sources);
-        assert!(rest_samples(&c, 0) >= rest);
+        assert!(c.rest_samples(0) >= rest);
         assert_eq!(estimate_noise(&c).method, FROM_REST);
     }
 }

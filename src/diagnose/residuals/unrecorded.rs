@@ -6,7 +6,7 @@
 //! [`super::predict`] then feed back as on the table (without it they predict a spread
 //! several times too small around the oil column, and every test looks missed there).
 
-use super::noise::{from_rest, median, rest_segment, std_dev, white_loop_noise, NoiseFloor};
+use super::noise::{from_rest, median, std_dev, white_loop_noise, NoiseFloor};
 use super::run::{with_test_gains, DIAGNOSIS_SUBSTEP_S};
 use crate::campaign::{Campaign, Measured};
 use crate::params::Params;
@@ -86,7 +86,7 @@ impl RestExcess {
     /// probe run stops.
     fn of_test(p: &Params, c: &Campaign, i: usize, noise: &NoiseFloor) -> Option<RestExcess> {
         let acceleration = c.records[i].measured(Measured::Acceleration)?;
-        let measured = std_dev(&acceleration[rest_segment(c, i)?]).powi(2);
+        let measured = std_dev(&acceleration[c.rest_segment(i)?]).powi(2);
         let s = &noise.sensor;
         let others = rest_acceleration_variance(p, c, i, [0.0, s.acceleration_m_s2, s.force_n])?;
         Some(RestExcess {

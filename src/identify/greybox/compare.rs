@@ -45,7 +45,25 @@ pub struct ChannelFit {
     pub fit_percent: f64,
     /// RMS of the measured channel (mean removed), in its SI unit.
     pub measured_rms: f64,
+    /// RMS of the measured channel (mean removed) over the test's rest segment
+    /// ([`Campaign::rest_segment`]): the sensor's noise and the loop's response to it,
+    /// which no noise-free simulation follows. `None` without a rest segment.
+    pub noise_rms: Option<f64>,
+    /// The most fit % a noise-free simulation of the true table can reach with the noise
+    /// at rest in the channel: `100 (1 - noise_rms / measured_rms)`. In motion the loop's
+    /// response to the sensors' noise is larger still (the friction no longer holds the
+    /// table: a slow sine's acceleration fits at 1 % under a ceiling of 24 %), so this
+    /// bounds the fit from above. Where it is low the channel is mostly noise, and its
+    /// fit % says little of the model.
+    pub noise_ceiling_percent: Option<f64>,
+    /// The ceiling is below [`NOISE_LIMITED_CEILING_PERCENT`]: the channel is mostly noise.
+    pub noise_limited: bool,
 }
+
+/// A fit whose noise ceiling is below this, %, is noise-limited: the noise at rest is
+/// more than half the channel's RMS (a slow test's acceleration), and its fit % says
+/// more of the sensors than of the model.
+pub const NOISE_LIMITED_CEILING_PERCENT: f64 = 50.0;
 
 /// Seconds of each test kept for the report's measured-against-simulated figure.
 const TRACE_S: f64 = 10.0;
@@ -73,8 +91,7 @@ const MOTION_FRACTION: f64 = 0.1;
 
 /// The first sample of the figure: [`TRACE_LEAD_S`] before `meas` first moves.
 fn trace_start(meas: &[f64], fs: f64) -> usize {
-    let m = mean(meas);
-    let rms = (meas.iter().map(|v| (v - m).powi(2)).sum::<f64>() / meas.len().max(1) as f64).sqrt();
+    let rms = centred_rms(meas);
     let first = meas.first().copied().unwrap_or(0.0);
     let moved = meas
         .iter()
@@ -174,6 +191,12 @@ fn mean(x: &[f64]) -> f64 {
     x.iter().sum::<f64>() / x.len().max(1) as f64
 }
 
+/// RMS of `x` about its mean.
+fn centred_rms(x: &[f64]) -> f64 {
+    let m = mean(x);
+    (x.iter().map(|v| (v - m).powi(2)).sum::<f64>() / x.len().max(1) as f64).sqrt()
+}
+
 /// NRMSE of `sim` against `meas`, means removed; `None` for a flat or empty channel.
 pub fn nrmse(meas: &[f64], sim: &[f64]) -> Option<(f64, f64)> {
     let (mm, ms) = (mean(meas), mean(sim));
@@ -226,6 +249,8 @@ pub fn compare(
             let s: Vec<f64> = sim.iter().map(|o| simulated(o, m)).collect();
             if let Some((e, rms)) = nrmse(meas, &s) {
                 let test = &c.info.tests[i].name;
+                let noise_rms = c.rest_segment(i).map(|r| centred_rms(&meas[r]));
+                let ceiling = noise_rms.map(|n| 100.0 * (1.0 - n / rms));
                 out.traces
                     .push(trace(test, m.name(), role, c.sample_rate_of(i), meas, &s));
                 out.fits.push(ChannelFit {
@@ -235,6 +260,9 @@ pub fn compare(
                     nrmse: e,
                     fit_percent: 100.0 * (1.0 - e),
                     measured_rms: rms,
+                    noise_rms,
+                    noise_ceiling_percent: ceiling,
+                    noise_limited: ceiling.is_some_and(|c| c < NOISE_LIMITED_CEILING_PERCENT),
                 });
             }
         }
@@ -245,6 +273,49 @@ pub fn compare(
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::campaign::synth::{synthesise, SynthOptions};
+
+    /// Points of fit % by which the true table's noise-free simulation may exceed the
+    /// noise ceiling: the noise's own draw over a test (its RMS over 8 s is known to a
+    /// percent or two).
+    const CEILING_SLACK_POINTS: f64 = 2.0;
+
+    /// The true table simulated noise-free fits a test at most as well as its noise at
+    /// rest allows, and about that well where the motion dominates (a random test); a
+    /// slow sine's acceleration is mostly noise (noise-limited: a low fit that says
+    /// nothing against the model), and in motion more so than at rest.
+    #[test]
+    fn the_true_table_fits_no_better_than_the_noise_at_rest_allows() {
+        let truth = Params::trees_lab();
+        let opts = SynthOptions {
+            random_duration_s: 8.0,
+            tests: Some(vec!["R1".into(), "S1".into()]),
+            ..SynthOptions::default()
+        };
+        let c = synthesise(&truth, &opts, None);
+        let tests = [(0, Role::Validation), (1, Role::Validation)];
+        let cmp = compare(&truth, &c, &tests, &[Measured::Acceleration]);
+        assert_eq!(cmp.fits.len(), 2, "{:?}", cmp.stopped);
+        for f in &cmp.fits {
+            let ceiling = f
+                .noise_ceiling_percent
+                .expect("a synthetic test starts at rest");
+            assert!(
+                f.fit_percent < ceiling + CEILING_SLACK_POINTS,
+                "{} fit {:.1} % for a ceiling of {ceiling:.1} %",
+                f.test,
+                f.fit_percent
+            );
+        }
+        let fit = |name: &str| cmp.fits.iter().find(|f| f.test == name).unwrap();
+        let r1 = fit("R1");
+        let r1_ceiling = r1.noise_ceiling_percent.unwrap();
+        assert!(
+            r1.fit_percent > r1_ceiling - CEILING_SLACK_POINTS,
+            "R1 {r1:?}"
+        );
+        assert!(fit("S1").noise_limited && !r1.noise_limited);
+    }
 
     #[test]
     fn the_figure_starts_a_second_before_the_motion() {
