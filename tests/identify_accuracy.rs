@@ -84,6 +84,18 @@ fn check(label: &str, p: &Params, seed: u64) {
         rel(id.friction.as_ref().unwrap().force_n, p.friction.force_n),
         0.15,
     );
+    // the Bouc-Wen yield and shape (eq. 4.15), beyond the paper's table: driven by the
+    // LVDT's noisy path they came out 1-2 % low and 11-16 % high (the path turned at every
+    // wiggle); on the path without the noise's back-and-forth, the shape is within 3 % on
+    // six seeds of the default table (scripts/dev/identify_sweep.py; 3-4.4 % on these
+    // three tables), the yield within 1.3 %: the tolerances are about twice the largest
+    let fr = id.friction.as_ref().unwrap();
+    expect(
+        "yield displacement",
+        rel(fr.yield_displacement_m, p.friction.yield_displacement_m),
+        0.05,
+    );
+    expect("friction shape", rel(fr.shape, p.friction.shape), 0.10);
     let k = id.triangles.as_ref().unwrap().stiffness_n_m;
     if p.table.stiffness_n_m == 0.0 {
         report.push(format!("stiffness: {k:.0} N/m (|k| < 2e4)"));

@@ -4,7 +4,7 @@
 use super::error::IdentifyError;
 use super::lsq::{minimise, LsqOptions};
 use super::results::{FrictionFit, TriangleFit};
-use super::signals::{derivative, smooth};
+use super::signals::{derivative, fourth_difference_rms, monotone_path, smooth};
 use super::{
     check_bounds, check_moved, lsq, MIN_SINE_CYCLES, MIN_TRIANGLE_CYCLES, TRIANGLE_FRACTION,
 };
@@ -124,11 +124,35 @@ pub(super) fn slow_list(names: &[String], none: &str) -> String {
     }
 }
 
+/// Half-width of the displacement's centred moving average, samples (16 ms at 512 Hz).
+const SMOOTHING_HALF_WIDTH: usize = 8;
+
+/// A reversal of the Bouc-Wen path counts once the smoothed displacement comes back by
+/// this many of its noise's RMS: the smoothed noise wanders by a few RMS within a
+/// reversal's dwell, and a real reversal of a sine runs on by its whole stroke.
+const PATH_NOISE_FACTOR: f64 = 5.0;
+
+/// The threshold of [`monotone_path`] for the displacement `raw`: [`PATH_NOISE_FACTOR`]
+/// times its white noise after the moving average (the average of `2 h + 1` samples
+/// divides the variance by as many).
+fn path_threshold(raw: &[f64]) -> f64 {
+    let averaged = (2 * SMOOTHING_HALF_WIDTH + 1) as f64;
+    let sigma = fourth_difference_rms(raw) / averaged.sqrt();
+    if sigma.is_finite() {
+        PATH_NOISE_FACTOR * sigma
+    } else {
+        0.0
+    }
+}
+
 /// The steady part of a sine test: smoothed displacement and its velocity, measured
 /// acceleration and force.
 pub(super) struct SineData {
     pub(super) name: String,
     pub(super) x: Vec<f64>,
+    /// `x` without its noise's back-and-forth ([`monotone_path`]): what drives the
+    /// Bouc-Wen friction (eq. 4.15), which turns at every wiggle of its input.
+    pub(super) path: Vec<f64>,
     pub(super) v: Vec<f64>,
     pub(super) a: Vec<f64>,
     pub(super) f: Vec<f64>,
@@ -168,11 +192,14 @@ pub(super) fn sine_data(c: &Campaign, names: &[&str]) -> (Vec<SineData>, Vec<Str
             let r = steady_range(spec, rec);
             // every channel is there: the filter above kept only such tests
             let get = |m| rec.measured(m).unwrap_or_default();
-            let xs = smooth(get(Measured::Displacement), 8);
+            let raw = get(Measured::Displacement);
+            let xs = smooth(raw, SMOOTHING_HALF_WIDTH);
             let v = derivative(&xs, c.sample_rate_for(spec));
+            let path = monotone_path(&xs, path_threshold(raw));
             SineData {
                 name: spec.name.clone(),
                 x: xs[r.clone()].to_vec(),
+                path: path[r.clone()].to_vec(),
                 v: v[r.clone()].to_vec(),
                 a: get(Measured::Acceleration)[r.clone()].to_vec(),
                 f: get(Measured::Force)[r].to_vec(),
@@ -217,7 +244,7 @@ pub fn fit_friction(
         let (fmu, y, b) = (p[0], p[1], p[2]);
         let mut r = Vec::new();
         for (d, fdi) in data.iter().zip(&fd) {
-            let z = bouc_wen_path(&d.x, y, b, d.v[0].signum());
+            let z = bouc_wen_path(&d.path, y, b, d.v[0].signum());
             for i in (0..z.len()).step_by(dec) {
                 r.push(fmu * z[i] - fdi[i]);
             }
@@ -247,7 +274,7 @@ pub fn fit_friction(
     check_moved(&who, "Bouc-Wen fit", &fit, &t0, &scale)?;
     let (fmu, y, b) = (fit.theta[0], fit.theta[1], fit.theta[2]);
     let d0 = &data[0];
-    let z = bouc_wen_path(&d0.x, y, b, d0.v[0].signum());
+    let z = bouc_wen_path(&d0.path, y, b, d0.v[0].signum());
     let step = (d0.x.len() / 2000).max(1);
     Ok(FrictionFit {
         tests: data.iter().map(|d| d.name.clone()).collect(),

@@ -28,7 +28,7 @@ mod periodic;
 mod results;
 pub mod select;
 mod servovalve;
-mod signals;
+pub(crate) mod signals;
 pub mod spool;
 mod validation;
 

@@ -32,7 +32,7 @@ pub fn fit_mass_periodic(
     let mut sig = Vec::new();
     for d in &data {
         let fd: Vec<f64> = match friction {
-            Some(fr) => bouc_wen_path(&d.x, fr.yield_displacement_m, fr.shape, d.v[0].signum())
+            Some(fr) => bouc_wen_path(&d.path, fr.yield_displacement_m, fr.shape, d.v[0].signum())
                 .iter()
                 .map(|z| fr.force_n * z)
                 .collect(),
@@ -91,7 +91,7 @@ const JOINT_DECIMATION: usize = 4;
 /// direction that reached it.
 fn joint_paths(data: &[SineData], yield_m: f64, shape: f64) -> Vec<Vec<f64>> {
     data.iter()
-        .map(|d| bouc_wen_path(&d.x, yield_m, shape, d.x[0].signum()))
+        .map(|d| bouc_wen_path(&d.path, yield_m, shape, d.x[0].signum()))
         .collect()
 }
 
@@ -208,7 +208,7 @@ fn joint_results(
 ) -> (FrictionFit, PeriodicMassFit) {
     let p = &fit.theta;
     let (d0, t0) = (&data[0], &target[0]);
-    let z = bouc_wen_path(&d0.x, p[1], p[2], d0.x[0].signum());
+    let z = bouc_wen_path(&d0.path, p[1], p[2], d0.x[0].signum());
     let step = (d0.x.len() / 2000).max(1);
     let fd0: Vec<f64> = (0..d0.x.len()).map(|i| t0[i] - p[3] * d0.a[i]).collect();
     let tests: Vec<String> = data.iter().map(|d| d.name.clone()).collect();

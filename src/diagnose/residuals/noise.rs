@@ -3,6 +3,7 @@
 
 use super::channels::{Channel, PerChannel};
 use crate::campaign::Campaign;
+use crate::identify::signals::fourth_difference_rms;
 use crate::SensorNoise;
 use rand::SeedableRng;
 use rand_chacha::ChaCha8Rng;
@@ -118,20 +119,6 @@ pub(crate) fn median(mut v: Vec<f64>) -> f64 {
     }
     v.sort_by(f64::total_cmp);
     v[v.len() / 2]
-}
-
-/// White-noise RMS from the fourth difference: its variance is 70 times the noise's
-/// (binomial(8, 4)), while a signal at 14 Hz sampled at 512 Hz is attenuated to 8e-4 of
-/// its amplitude, so slow motion and the oil-column chatter do not leak in.
-pub(super) fn fourth_difference_rms(x: &[f64]) -> f64 {
-    if x.len() < 16 {
-        return f64::NAN;
-    }
-    let d: Vec<f64> = x
-        .windows(5)
-        .map(|w| w[0] - 4.0 * w[1] + 6.0 * w[2] - 4.0 * w[3] + w[4])
-        .collect();
-    std_dev(&d) / 70f64.sqrt()
 }
 
 /// Lower bound of a sensor's noise estimate, so that a noise-free record does not divide
