@@ -48,6 +48,7 @@ mod direction_starts;
 mod effect;
 mod effort;
 mod evidence;
+mod fits;
 mod free_play_fit;
 mod free_play_start;
 mod locate;
@@ -65,6 +66,7 @@ mod visibility;
 
 pub use effect::{Effect, EFFECTS};
 pub use effort::Effort;
+pub use fits::{medians_by_channel, ModelFit};
 pub use locate::{Dependence, Split};
 pub use model_error::{
     model_error_response, unexplained_responses, CellResponse, ModelErrorPeak, ModelErrorResponse,

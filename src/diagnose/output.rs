@@ -158,6 +158,9 @@ pub struct Diagnosis {
     pub extended: Params,
     /// Where the residual lies when not explained, worst first.
     pub unexplained: Vec<UnexplainedCell>,
+    /// Per test and channel, the fit % of the baseline and the extended model on the
+    /// report quarter ([`super::fits`]).
+    pub fits: Vec<super::ModelFit>,
     pub tests: Vec<String>,
     pub valve_model: ServovalveModel,
     pub actuator_model: ActuatorModel,
@@ -342,6 +345,7 @@ impl Diagnosis {
             "gain": self.gain,
             "explained": self.explained,
             "unexplained": self.unexplained,
+            "fits": self.fits,
             "baseline_residuals": base,
             "baseline_heldout_residual": self.baseline_heldout,
             "extended_heldout_residual": self.extended_heldout,

@@ -238,6 +238,7 @@ pub fn write(
     }
     html.push_str("</table>");
     super::diagnose_causes::write_causes(&mut html, &mut md, d);
+    write_fits(&mut html, &mut md, d);
     super::diagnose_model_error::write_model_error(dir, responses, &mut html, &mut md)?;
     html.push_str("<h2>Candidates of the first search</h2><table><tr><th>effect</th><th>parameters</th><th>report residual</th><th>selection score</th></tr>");
     md.push_str("\n## Candidates of the first search\n\n| effect | parameters | report residual | selection score |\n|---|---|---|---|\n");
@@ -284,4 +285,50 @@ pub fn write(
     crate::output::atomic_write(&dir.join("index.html"), html.as_bytes())?;
     crate::output::atomic_write(&dir.join("README.md"), md.as_bytes())?;
     Ok(())
+}
+
+/// The fits of the baseline and the extended model on the report quarters (NRMSE and
+/// fit % as the identification's), per test and channel.
+fn write_fits(html: &mut String, md: &mut String, d: &Diagnosis) {
+    const WHAT: &str = "Every test simulated as it was run (its reference, its gains) with \
+        the refined baseline and with the extended model; per channel fit % = 100 (1 - \
+        NRMSE), NRMSE = RMS(measured - simulated) / RMS(measured), means removed, over each \
+        test's last quarter, which no fit and no decision used. \"noise allows\" is the \
+        most a noise-free simulation of the true table reaches with the noise the channel \
+        shows at rest.";
+    let pct = |x: Option<f64>| x.map_or("-".to_string(), |x| format!("{x:.2}"));
+    let _ = write!(
+        html,
+        "<h2>Measured against simulated (report quarters)</h2><p>{}</p><table><tr>\
+         <th>test</th><th>channel</th><th>baseline fit %</th><th>extended fit %</th>\
+         <th>noise allows %</th></tr>",
+        escape_html(WHAT)
+    );
+    let _ = write!(
+        md,
+        "\n## Measured against simulated (report quarters)\n\n{WHAT}\n\n| test | channel | \
+         baseline fit % | extended fit % | noise allows % |\n|---|---|---|---|---|\n"
+    );
+    for f in &d.fits {
+        let cells = [
+            pct(f.baseline_fit_percent),
+            pct(f.extended_fit_percent),
+            pct(f.noise_ceiling_percent),
+        ];
+        let _ = write!(
+            html,
+            "<tr><td>{}</td><td>{}</td><td>{}</td><td>{}</td><td>{}</td></tr>",
+            escape_html(&f.test),
+            f.channel,
+            cells[0],
+            cells[1],
+            cells[2]
+        );
+        let _ = writeln!(
+            md,
+            "| {} | {} | {} | {} | {} |",
+            f.test, f.channel, cells[0], cells[1], cells[2]
+        );
+    }
+    html.push_str("</table>");
 }

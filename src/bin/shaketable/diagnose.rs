@@ -197,6 +197,14 @@ pub fn run(args: Args) -> anyhow::Result<()> {
             p.test, p.channel, p.input, p.frequency_hz, p.gain, p.unit, p.coherence
         );
     }
+    let pct = |x: Option<f64>| x.map_or("-".to_string(), |x| format!("{x:.1} %"));
+    for (channel, base, ext, n) in shaketable::diagnose::medians_by_channel(&d.fits) {
+        println!(
+            "  fit of {channel} on the report quarters (median of {n} tests): baseline {}, extended {}",
+            pct(base),
+            pct(ext)
+        );
+    }
     if let Some(note) = d.structure_change() {
         println!("{note}");
     }

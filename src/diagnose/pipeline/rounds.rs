@@ -88,7 +88,9 @@ pub(in crate::diagnose) fn diagnose_with(
             .any(|k| k.effect.specimen_modes().is_some()))
     .then(|| specimen_visibility(&extended, c, &d.whitening))
     .flatten();
+    let fits = super::super::fits::report_quarter_fits(&base, &extended, c);
     Diagnosis {
+        fits,
         baseline: base,
         baseline_rows,
         baseline_select,

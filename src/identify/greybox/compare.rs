@@ -192,7 +192,7 @@ fn mean(x: &[f64]) -> f64 {
 }
 
 /// RMS of `x` about its mean.
-fn centred_rms(x: &[f64]) -> f64 {
+pub fn centred_rms(x: &[f64]) -> f64 {
     let m = mean(x);
     (x.iter().map(|v| (v - m).powi(2)).sum::<f64>() / x.len().max(1) as f64).sqrt()
 }
