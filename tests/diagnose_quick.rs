@@ -122,6 +122,10 @@ fn quick_diagnosis_names_and_fits_a_specimen() {
 /// random test: the specimen's resonance leaves the table alone 7-22 points short (a
 /// model gaining less than half of that has not found it).
 const FIT_GAIN_POINTS: f64 = 3.0;
+/// Acceleration fit % the extended model must reach on every random test: 93-98 % on seed
+/// 31 where the noise allows 94-99.8 %; a specimen fitted to within the suite's
+/// tolerances stays above 90 %.
+const EXTENDED_FIT_PERCENT: f64 = 90.0;
 
 #[test]
 fn quick_diagnosis_of_clean_data_is_none() {

@@ -89,6 +89,7 @@ fn check(label: &str, p: &Params, seed: u64) {
     // wiggle); on the path without the noise's back-and-forth, the shape is within 3 % on
     // six seeds of the default table (scripts/dev/identify_sweep.py; 3-4.4 % on these
     // three tables), the yield within 1.3 %: the tolerances are about twice the largest
+    // shape error and four times the largest yield error
     let fr = id.friction.as_ref().unwrap();
     expect(
         "yield displacement",

@@ -401,5 +401,6 @@ pub(super) fn scored_candidate(
         select,
         report,
         fewer_modes: None,
+        refitted_sigma: Vec::new(),
     }
 }

@@ -5,8 +5,12 @@
 //! its simulation follows the records, in the figures a laboratory compares models by.
 
 use super::part::Part;
+use super::residuals::noise::median;
 use crate::campaign::{Campaign, Measured};
-use crate::identify::greybox::compare::{centred_rms, nrmse, simulate_as_run, simulated, COMPARED};
+use crate::identify::greybox::compare::{
+    noise_ceiling, nrmse, simulate_as_run, simulated, COMPARED,
+};
+use crate::identify::signals::centred_rms;
 use crate::params::Params;
 use crate::Outputs;
 use rayon::prelude::*;
@@ -23,7 +27,8 @@ pub struct ModelFit {
     /// The same for the extended model.
     pub extended_fit_percent: Option<f64>,
     /// The most a noise-free simulation of the true table reaches with the noise the
-    /// channel shows at rest (as the identification's, over the quarter's RMS).
+    /// channel shows at rest: the identification's ceiling, over the quarter's RMS where
+    /// the identification takes the whole test's.
     pub noise_ceiling_percent: Option<f64>,
 }
 
@@ -39,59 +44,69 @@ fn quarter_fit(
     nrmse(&meas[range], &sim).map(|(e, _)| 100.0 * (1.0 - e))
 }
 
-/// [`ModelFit`] of every test of `c` and every channel it recorded, `baseline` against
-/// `extended` (the runs as each test was run: its gains, from rest).
-pub fn report_quarter_fits(baseline: &Params, extended: &Params, c: &Campaign) -> Vec<ModelFit> {
-    let runs: Vec<_> = (0..c.records.len())
-        .into_par_iter()
-        .map(|i| {
-            (
-                simulate_as_run(baseline, c, i),
-                simulate_as_run(extended, c, i),
-            )
-        })
-        .collect();
-    let mut out = Vec::new();
-    for (i, (base, ext)) in runs.iter().enumerate() {
-        let r = &c.records[i];
-        let range = Part::Report.range(r.len());
-        for m in COMPARED {
-            let Some(meas) = r.measured(m) else {
-                continue;
-            };
+/// [`ModelFit`]s of test `i` of `c`, every channel it recorded.
+fn test_fits(baseline: &Params, extended: &Params, c: &Campaign, i: usize) -> Vec<ModelFit> {
+    let base = simulate_as_run(baseline, c, i);
+    // without a cause the extended model is the baseline: one run serves both
+    let ext = (extended != baseline).then(|| simulate_as_run(extended, c, i));
+    let r = &c.records[i];
+    let range = Part::Report.range(r.len());
+    let rest = c.rest_segment(i);
+    COMPARED
+        .into_iter()
+        .filter_map(|m| {
+            let meas = r.measured(m)?;
             let rms = centred_rms(&meas[range.clone()]);
-            let rest = c.rest_segment(i).map(|rest| centred_rms(&meas[rest]));
-            out.push(ModelFit {
+            let fit = |run| quarter_fit(run, meas, range.clone(), m);
+            Some(ModelFit {
                 test: c.info.tests[i].name.clone(),
                 channel: m.name(),
-                baseline_fit_percent: quarter_fit(base, meas, range.clone(), m),
-                extended_fit_percent: quarter_fit(ext, meas, range.clone(), m),
-                noise_ceiling_percent: rest.filter(|_| rms > 0.0).map(|n| 100.0 * (1.0 - n / rms)),
-            });
-        }
-    }
-    out
+                baseline_fit_percent: fit(&base),
+                extended_fit_percent: fit(ext.as_ref().unwrap_or(&base)),
+                noise_ceiling_percent: rest
+                    .clone()
+                    .and_then(|rest| noise_ceiling(centred_rms(&meas[rest]), rms)),
+            })
+        })
+        .collect()
 }
 
-/// Per channel of `fits` (in [`COMPARED`] order): the median fit % over tests of the
-/// baseline and of the extended model (over the tests where each ran), and the tests.
-pub fn medians_by_channel(
-    fits: &[ModelFit],
-) -> Vec<(&'static str, Option<f64>, Option<f64>, usize)> {
-    let median = |mut v: Vec<f64>| {
-        v.sort_by(f64::total_cmp);
-        let n = v.len();
-        (n > 0).then(|| 0.5 * (v[(n - 1) / 2] + v[n / 2]))
+/// [`ModelFit`] of every test of `c` and every channel it recorded, `baseline` against
+/// `extended` (the runs as each test was run: its gains, from rest), one test's runs held
+/// at a time.
+pub fn report_quarter_fits(baseline: &Params, extended: &Params, c: &Campaign) -> Vec<ModelFit> {
+    (0..c.records.len())
+        .into_par_iter()
+        .flat_map_iter(|i| test_fits(baseline, extended, c, i))
+        .collect()
+}
+
+/// Per channel of `fits` (in [`COMPARED`] order), the median fit % over the tests each
+/// model ran through.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct ChannelMedian {
+    pub channel: &'static str,
+    /// Median and tests counted, of the baseline; `None` when no run got through.
+    pub baseline: Option<(f64, usize)>,
+    pub extended: Option<(f64, usize)>,
+}
+
+/// [`ChannelMedian`] of every channel in `fits`.
+pub fn medians_by_channel(fits: &[ModelFit]) -> Vec<ChannelMedian> {
+    let of = |v: Vec<f64>| {
+        (!v.is_empty())
+            .then(|| (v.len(), median(v)))
+            .map(|(n, m)| (m, n))
     };
     COMPARED
         .iter()
         .map(|m| m.name())
-        .filter_map(|ch| {
-            let of: Vec<&ModelFit> = fits.iter().filter(|f| f.channel == ch).collect();
-            (!of.is_empty()).then(|| {
-                let base = median(of.iter().filter_map(|f| f.baseline_fit_percent).collect());
-                let ext = median(of.iter().filter_map(|f| f.extended_fit_percent).collect());
-                (ch, base, ext, of.len())
+        .filter_map(|channel| {
+            let here: Vec<&ModelFit> = fits.iter().filter(|f| f.channel == channel).collect();
+            (!here.is_empty()).then(|| ChannelMedian {
+                channel,
+                baseline: of(here.iter().filter_map(|f| f.baseline_fit_percent).collect()),
+                extended: of(here.iter().filter_map(|f| f.extended_fit_percent).collect()),
             })
         })
         .collect()
@@ -136,18 +151,17 @@ mod tests {
             assert!(b < e - 10.0, "{f:?}");
         }
         let medians = medians_by_channel(&fits);
-        let (ch, b, e, n) = medians
+        let acc = medians
             .iter()
-            .find(|m| m.0 == "acceleration_m_s2")
-            .copied()
+            .find(|m| m.channel == "acceleration_m_s2")
             .unwrap();
-        assert_eq!((ch, n), ("acceleration_m_s2", 3));
-        let mut ext: Vec<f64> = acc
+        let mut ext: Vec<f64> = fits
             .iter()
+            .filter(|f| f.channel == "acceleration_m_s2")
             .map(|f| f.extended_fit_percent.unwrap())
             .collect();
         ext.sort_by(f64::total_cmp);
-        assert_eq!(e, Some(ext[1]));
-        assert!(b.unwrap() < e.unwrap());
+        assert_eq!(acc.extended, Some((ext[1], 3)));
+        assert!(acc.baseline.unwrap().0 < ext[1]);
     }
 }

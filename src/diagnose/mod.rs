@@ -66,7 +66,7 @@ mod visibility;
 
 pub use effect::{Effect, EFFECTS};
 pub use effort::Effort;
-pub use fits::{medians_by_channel, ModelFit};
+pub use fits::{medians_by_channel, ChannelMedian, ModelFit};
 pub use locate::{Dependence, Split};
 pub use model_error::{
     model_error_response, unexplained_responses, CellResponse, ModelErrorPeak, ModelErrorResponse,

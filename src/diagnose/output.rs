@@ -55,6 +55,10 @@ pub struct Candidate {
     /// back to when polishing leaves no evidence of the last mode.
     #[serde(skip)]
     pub fewer_modes: Option<Box<Candidate>>,
+    /// The one-sigma uncertainties of the causes accepted before, refitted with this one
+    /// by its polish, each in its effect's parameter order (empty without a polish).
+    #[serde(skip)]
+    pub refitted_sigma: Vec<(Effect, Vec<f64>)>,
 }
 
 impl Candidate {
@@ -73,6 +77,7 @@ impl Candidate {
             select: PartRows::default(),
             report: PartRows::default(),
             fewer_modes: None,
+            refitted_sigma: Vec::new(),
         }
     }
 }

@@ -283,7 +283,10 @@ impl Diagnoser<'_> {
     }
 
     /// `from` refined like the baseline (every fitting test, the friction shape and valve
-    /// dynamics free too) with the actuator variant `model`, scored.
+    /// dynamics free too) with the actuator variant `model`, scored. The causes accepted
+    /// before, read off the switches in `from`'s parameters ([`Effect::present_in`]; the
+    /// identified table switches none on), are refitted with it, their uncertainties
+    /// kept in [`Candidate::refitted_sigma`].
     fn polish(
         &self,
         from: &Candidate,
@@ -321,12 +324,20 @@ impl Diagnoser<'_> {
             self.effort.polish_iterations(),
         )?;
         let theta = from.effect.read(&r.params);
-        // the refinement lists the freed effects' sigmas and bounds, this one's first
-        let own = if from.effect.fitted_on_score() {
-            0
-        } else {
-            theta.len()
-        };
+        // the refinement lists the freed effects' sigmas and bounds in the order given,
+        // this one's first; the effects fitted on the score are held and listed nowhere
+        let freed = |e: &Effect, n: usize| if e.fitted_on_score() { 0 } else { n };
+        let own = freed(&from.effect, theta.len());
+        let mut at = own;
+        let refitted_sigma: Vec<(Effect, Vec<f64>)> = accepted
+            .iter()
+            .filter(|(e, t)| freed(e, t.len()) > 0)
+            .map(|(e, t)| {
+                at += t.len();
+                (*e, r.effect_sigma[at - t.len()..at].to_vec())
+            })
+            .collect();
+        debug_assert_eq!(at, r.effect_sigma.len());
         let (own_sigma, own_bounds) = (
             &r.effect_sigma[..own],
             (
@@ -370,6 +381,7 @@ impl Diagnoser<'_> {
             self.report_missed.rms(rows)
         });
         polished.fewer_modes = from.fewer_modes.clone();
+        polished.refitted_sigma = refitted_sigma;
         Some(polished)
     }
 

@@ -45,9 +45,14 @@ pub(crate) fn fourth_difference_rms(x: &[f64]) -> f64 {
         .windows(5)
         .map(|w| w[0] - 4.0 * w[1] + 6.0 * w[2] - 4.0 * w[3] + w[4])
         .collect();
-    let n = d.len() as f64;
-    let m = d.iter().sum::<f64>() / n;
-    (d.iter().map(|v| (v - m).powi(2)).sum::<f64>() / n / 70.0).sqrt()
+    centred_rms(&d) / 70f64.sqrt()
+}
+
+/// RMS of `x` about its mean (its standard deviation); 0 for no samples.
+pub(crate) fn centred_rms(x: &[f64]) -> f64 {
+    let n = x.len().max(1) as f64;
+    let m = x.iter().sum::<f64>() / n;
+    (x.iter().map(|v| (v - m).powi(2)).sum::<f64>() / n).sqrt()
 }
 
 /// The path of `x` with its sensor noise's back-and-forth taken out: between reversals it
@@ -55,7 +60,7 @@ pub(crate) fn fourth_difference_rms(x: &[f64]) -> f64 {
 /// reversal counts once `x` has come back by `threshold` from the last extreme. A
 /// rate-independent hysteresis (Bouc-Wen, eq. 4.15) driven by a noisy displacement turns
 /// at every wiggle: an LVDT noise of 2 % of the yield displacement made the fitted shape
-/// `b` 13-16 % high. Hand-written: a hysteresis filter of a few lines (the "turning
+/// `b` 11-16 % high. Hand-written: a hysteresis filter of a few lines (the "turning
 /// point" filter of rainflow counting), which no crate offers on its own.
 pub(super) fn monotone_path(x: &[f64], threshold: f64) -> Vec<f64> {
     let Some(&first) = x.first() else {

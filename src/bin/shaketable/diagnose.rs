@@ -197,12 +197,17 @@ pub fn run(args: Args) -> anyhow::Result<()> {
             p.test, p.channel, p.input, p.frequency_hz, p.gain, p.unit, p.coherence
         );
     }
-    let pct = |x: Option<f64>| x.map_or("-".to_string(), |x| format!("{x:.1} %"));
-    for (channel, base, ext, n) in shaketable::diagnose::medians_by_channel(&d.fits) {
+    let median = |x: Option<(f64, usize)>| {
+        x.map_or("no run got through".to_string(), |(m, n)| {
+            format!("{m:.1} % (median of {n} tests)")
+        })
+    };
+    for m in shaketable::diagnose::medians_by_channel(&d.fits) {
         println!(
-            "  fit of {channel} on the report quarters (median of {n} tests): baseline {}, extended {}",
-            pct(base),
-            pct(ext)
+            "  fit of {} on the report quarters: baseline {}, extended {}",
+            m.channel,
+            median(m.baseline),
+            median(m.extended)
         );
     }
     if let Some(note) = d.structure_change() {

@@ -198,13 +198,10 @@ impl<'a> Diagnoser<'a> {
             };
             match verdict(&best, current_score, chance, table_mass_kg) {
                 Verdict::Cause => {
-                    let (cause, extended) = self.accept(best, &current, &missed, round);
+                    let (cause, extended) =
+                        self.accept(best, &current, &missed, round, &mut causes);
                     causes.push(cause);
                     current = extended;
-                    // the polish refitted the causes accepted before with this one
-                    for cause in &mut causes {
-                        cause.parameters = cause.effect.keyed(&cause.effect.read(&current.params));
-                    }
                 }
                 Verdict::Partial(why) => {
                     if round == 0 && unphysical(&best, table_mass_kg).is_some() {
@@ -234,12 +231,15 @@ impl<'a> Diagnoser<'a> {
     /// `best`, a cause on top of `current`, settled when a further search will follow (the
     /// next search must not credit its candidates with what this model's own parameters
     /// still had to settle): the cause with its report-quarter gain, and the model it makes.
+    /// The causes accepted before (`earlier`) take the values and uncertainties their
+    /// refit with `best` gave them, in the JSON and in the section-4 base alike.
     fn accept(
         &self,
         best: Candidate,
         current: &Current,
         missed: &Missed,
         round: usize,
+        earlier: &mut [Cause],
     ) -> (Cause, Current) {
         let best = if round + 1 < MAX_CAUSES && Missed::of(&best.select.residual).any {
             self.settle(best, missed, &current.hold())
@@ -256,6 +256,20 @@ impl<'a> Diagnoser<'a> {
         let mut section4 = current.section4;
         best.effect
             .apply(&mut section4, &best.effect.read(&best.params));
+        for cause in earlier.iter_mut() {
+            let theta = cause.effect.read(&best.params);
+            cause.effect.apply(&mut section4, &theta);
+            cause.parameters = cause.effect.keyed(&theta);
+            if let Some((_, sigma)) = best.refitted_sigma.iter().find(|(e, _)| *e == cause.effect) {
+                cause.sigma = cause
+                    .effect
+                    .parameters()
+                    .iter()
+                    .map(|k| k.to_string())
+                    .zip(sigma.iter().copied())
+                    .collect();
+            }
+        }
         if mass_is_scale(self.c) {
             // the held table mass is the one the cause was fitted against (a specimen's
             // start takes its own mass out of the identified one); the section-4 base

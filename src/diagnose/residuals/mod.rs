@@ -21,7 +21,7 @@
 //! response there.
 
 mod channels;
-mod noise;
+pub(crate) mod noise;
 mod prediction;
 mod run;
 mod scoring;

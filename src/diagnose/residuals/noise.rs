@@ -3,7 +3,7 @@
 
 use super::channels::{Channel, PerChannel};
 use crate::campaign::Campaign;
-use crate::identify::signals::fourth_difference_rms;
+use crate::identify::signals::{centred_rms, fourth_difference_rms};
 use crate::SensorNoise;
 use rand::SeedableRng;
 use rand_chacha::ChaCha8Rng;
@@ -106,12 +106,8 @@ const FROM_REST: &str = from_rest!();
 const FROM_HIGH_FREQUENCIES: &str =
     "floor and sensor noise from the high-frequency content (fourth difference; no rest segment)";
 
-pub(super) fn std_dev(x: &[f64]) -> f64 {
-    let n = x.len().max(1) as f64;
-    let m = x.iter().sum::<f64>() / n;
-    (x.iter().map(|v| (v - m).powi(2)).sum::<f64>() / n).sqrt()
-}
-
+/// The median of the finite values of `v` (the upper middle of an even count); NaN when
+/// none is finite.
 pub(crate) fn median(mut v: Vec<f64>) -> f64 {
     v.retain(|x| x.is_finite());
     if v.is_empty() {
@@ -150,7 +146,7 @@ pub fn estimate_noise(c: &Campaign) -> NoiseFloor {
                     hf_est[ch].push(fourth_difference_rms(m));
                 }
                 if let Some(rest) = rest.clone() {
-                    rest_est[ch].push(std_dev(&m[rest]));
+                    rest_est[ch].push(centred_rms(&m[rest]));
                 }
             }
         }

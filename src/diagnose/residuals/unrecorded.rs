@@ -6,9 +6,10 @@
 //! [`super::predict`] then feed back as on the table (without it they predict a spread
 //! several times too small around the oil column, and every test looks missed there).
 
-use super::noise::{from_rest, median, std_dev, white_loop_noise, NoiseFloor};
+use super::noise::{from_rest, median, white_loop_noise, NoiseFloor};
 use super::run::{with_test_gains, DIAGNOSIS_SUBSTEP_S};
 use crate::campaign::{Campaign, Measured};
+use crate::identify::signals::centred_rms;
 use crate::params::Params;
 use crate::solver::{simulate_run_with, Checks};
 use crate::{Inputs, Model};
@@ -86,7 +87,7 @@ impl RestExcess {
     /// probe run stops.
     fn of_test(p: &Params, c: &Campaign, i: usize, noise: &NoiseFloor) -> Option<RestExcess> {
         let acceleration = c.records[i].measured(Measured::Acceleration)?;
-        let measured = std_dev(&acceleration[c.rest_segment(i)?]).powi(2);
+        let measured = centred_rms(&acceleration[c.rest_segment(i)?]).powi(2);
         let s = &noise.sensor;
         let others = rest_acceleration_variance(p, c, i, [0.0, s.acceleration_m_s2, s.force_n])?;
         Some(RestExcess {
@@ -133,7 +134,7 @@ fn rest_acceleration_variance(p: &Params, c: &Campaign, i: usize, rms: [f64; 3])
         .zip(&draw)
         .map(|(o, n)| o.acceleration_m_s2 + n.acceleration_m_s2)
         .collect();
-    Some(std_dev(&reading).powi(2))
+    Some(centred_rms(&reading).powi(2))
 }
 
 #[cfg(test)]

@@ -8,6 +8,7 @@
 //! and `fit % = 100 (1 - NRMSE)`.
 
 use crate::campaign::{Campaign, Measured};
+use crate::identify::signals::centred_rms;
 use crate::model::{Inputs, Outputs};
 use crate::params::Params;
 use crate::solver::{simulate_run_with, Checks, DEFAULT_MAX_SUBSTEP_S};
@@ -58,6 +59,13 @@ pub struct ChannelFit {
     pub noise_ceiling_percent: Option<f64>,
     /// The ceiling is below [`NOISE_LIMITED_CEILING_PERCENT`]: the channel is mostly noise.
     pub noise_limited: bool,
+}
+
+/// The most fit % a noise-free simulation reaches on a channel of RMS `rms` (means
+/// removed) that carries a noise of RMS `noise_rms`: `100 (1 - noise_rms / rms)`. `None`
+/// for a flat channel.
+pub fn noise_ceiling(noise_rms: f64, rms: f64) -> Option<f64> {
+    (rms > 0.0).then(|| 100.0 * (1.0 - noise_rms / rms))
 }
 
 /// A fit whose noise ceiling is below this, %, is noise-limited: the noise at rest is
@@ -191,12 +199,6 @@ fn mean(x: &[f64]) -> f64 {
     x.iter().sum::<f64>() / x.len().max(1) as f64
 }
 
-/// RMS of `x` about its mean.
-pub fn centred_rms(x: &[f64]) -> f64 {
-    let m = mean(x);
-    (x.iter().map(|v| (v - m).powi(2)).sum::<f64>() / x.len().max(1) as f64).sqrt()
-}
-
 /// NRMSE of `sim` against `meas`, means removed; `None` for a flat or empty channel.
 pub fn nrmse(meas: &[f64], sim: &[f64]) -> Option<(f64, f64)> {
     let (mm, ms) = (mean(meas), mean(sim));
@@ -250,7 +252,7 @@ pub fn compare(
             if let Some((e, rms)) = nrmse(meas, &s) {
                 let test = &c.info.tests[i].name;
                 let noise_rms = c.rest_segment(i).map(|r| centred_rms(&meas[r]));
-                let ceiling = noise_rms.map(|n| 100.0 * (1.0 - n / rms));
+                let ceiling = noise_rms.and_then(|n| noise_ceiling(n, rms));
                 out.traces
                     .push(trace(test, m.name(), role, c.sample_rate_of(i), meas, &s));
                 out.fits.push(ChannelFit {
