@@ -1,0 +1,122 @@
+//! Physics no catalogue row describes (issue 17): the diagnosis must say `explained: false`
+//! and locate the residual, never name a catalogue effect as its cause. Each case is a
+//! seeded synthetic campaign (the hidden suite's 30-s records) whose recordings are then
+//! altered as a laboratory's might be: mains hum on the load cell, an accelerometer whose
+//! calibration is off.
+
+use std::path::Path;
+use std::process::Command;
+
+/// Mains frequency of the hum, Hz, and its amplitude, N: five times the force channel's
+/// default noise RMS (200 N) in one line of the spectrum.
+const HUM_HZ: f64 = 50.0;
+const HUM_N: f64 = 1000.0;
+
+/// The accelerometer's calibration error: it reads 8 % high, within what a wrong
+/// sensitivity or a wrong g in a lab's conversion gives.
+const ACCELEROMETER_GAIN: f64 = 1.08;
+
+fn synthesise(dir: &Path, seed: u64) {
+    let o = Command::new(env!("CARGO_BIN_EXE_shaketable"))
+        .args(["campaign", "synth", "--quiet", "--random-duration", "30"])
+        .args(["--seed", &seed.to_string()])
+        .arg(dir)
+        .output()
+        .unwrap();
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+}
+
+/// Rewrite column `name` of every test's CSV in `dir` with `f(time_s, value)`.
+fn alter(dir: &Path, name: &str, f: impl Fn(f64, f64) -> f64) {
+    for entry in std::fs::read_dir(dir).unwrap() {
+        let path = entry.unwrap().path();
+        if path.extension().is_none_or(|e| e != "csv") {
+            continue;
+        }
+        let text = std::fs::read_to_string(&path).unwrap();
+        let mut lines = text.lines();
+        let header = lines.next().unwrap();
+        let cols: Vec<&str> = header.split(',').collect();
+        let (t, j) = (
+            cols.iter().position(|c| *c == "time_s").unwrap(),
+            cols.iter().position(|c| *c == name).unwrap(),
+        );
+        let mut out = vec![header.to_string()];
+        for line in lines {
+            let mut v: Vec<String> = line.split(',').map(String::from).collect();
+            let (time, x) = (v[t].parse::<f64>().unwrap(), v[j].parse::<f64>().unwrap());
+            v[j] = format!("{:e}", f(time, x));
+            out.push(v.join(","));
+        }
+        std::fs::write(&path, out.join("\n") + "\n").unwrap();
+    }
+}
+
+fn diagnose(dir: &Path) -> serde_json::Value {
+    let json = dir.with_extension("json");
+    let o = Command::new(env!("CARGO_BIN_EXE_shaketable"))
+        .args(["diagnose", "--quiet", "--json"])
+        .arg(&json)
+        .arg(dir)
+        .output()
+        .unwrap();
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    serde_json::from_str(&std::fs::read_to_string(json).unwrap()).unwrap()
+}
+
+/// Share of the listed unexplained cells that must lie on the altered channel: the
+/// baseline's refinement bends to follow the altered channel and leaves a few cells of
+/// the others a little off (an 8 % accelerometer left one force and one displacement cell
+/// of twelve at 2-4 noise RMS).
+const ON_CHANNEL_SHARE: f64 = 0.75;
+
+/// No cause, `explained: false`, and the cells it lists (worst first) on `channel`: the
+/// worst one and most of them. Returns those on `channel`.
+fn unexplained_on(v: &serde_json::Value, channel: &str) -> Vec<serde_json::Value> {
+    assert_eq!(v["cause"], "none", "{v:#}");
+    assert_eq!(v["explained"], false, "{v:#}");
+    let cells = v["unexplained"].as_array().unwrap().clone();
+    assert!(!cells.is_empty(), "{v:#}");
+    assert_eq!(cells[0]["channel"], channel, "{cells:#?}");
+    let on: Vec<serde_json::Value> = cells
+        .iter()
+        .filter(|c| c["channel"] == channel)
+        .cloned()
+        .collect();
+    assert!(
+        on.len() as f64 >= ON_CHANNEL_SHARE * cells.len() as f64,
+        "{cells:#?}"
+    );
+    on
+}
+
+#[test]
+fn mains_hum_on_the_load_cell_is_unexplained_and_located_at_its_frequency() {
+    let tmp = tempfile::tempdir().unwrap();
+    let dir = tmp.path().join("campaign");
+    synthesise(&dir, 902);
+    alter(&dir, "force_n", |t, f| {
+        f + HUM_N * (std::f64::consts::TAU * HUM_HZ * t).sin()
+    });
+    let cells = unexplained_on(&diagnose(&dir), "force");
+    for c in cells {
+        let band: Vec<f64> = serde_json::from_value(c["band_hz"].clone()).unwrap();
+        assert!(band[0] <= HUM_HZ && HUM_HZ < band[1], "{c:#}");
+    }
+}
+
+#[test]
+fn a_miscalibrated_accelerometer_is_unexplained_and_located_on_its_channel() {
+    let tmp = tempfile::tempdir().unwrap();
+    let dir = tmp.path().join("campaign");
+    synthesise(&dir, 901);
+    alter(&dir, "acceleration_m_s2", |_, a| ACCELEROMETER_GAIN * a);
+    let cells = unexplained_on(&diagnose(&dir), "acceleration");
+    // the error is proportional to the motion: larger where the displacement is
+    let worst = &cells[0]["depends_on"]["large_displacement"];
+    assert!(
+        worst["when"].as_f64().unwrap() > worst["otherwise"].as_f64().unwrap(),
+        "{:#}",
+        cells[0]
+    );
+}
