@@ -6,6 +6,7 @@
 use crate::campaign::Campaign;
 use crate::diagnose::{padded, simulate_test, CellResponse, Channel, Diagnosis, Part};
 use crate::identify::frf::{Welch, WelchOptions};
+use crate::report::page::markdown_cell;
 use crate::report::plot::{bode_png, xy_png, BodeCurve, Series};
 use crate::report::{escape_html, markdown_code, safe_file_name};
 use std::fmt::Write as _;
@@ -225,7 +226,7 @@ pub fn write(
     md.push_str("\n|---|---|---|---|---|---|\n");
     for (name, r) in &d.baseline_rows {
         let _ = write!(html, "<tr><td>{}</td>", escape_html(name));
-        let _ = write!(md, "| {name} |");
+        let _ = write!(md, "| {} |", markdown_cell(name));
         for x in r.values() {
             // absent channels and a diverged run's infinite cells alike
             let shown = x.filter(|x| x.is_finite());
@@ -327,7 +328,11 @@ fn write_fits(html: &mut String, md: &mut String, d: &Diagnosis) {
         let _ = writeln!(
             md,
             "| {} | {} | {} | {} | {} |",
-            f.test, f.channel, cells[0], cells[1], cells[2]
+            markdown_cell(&f.test),
+            f.channel,
+            cells[0],
+            cells[1],
+            cells[2]
         );
     }
     html.push_str("</table>");

@@ -69,7 +69,7 @@ fn markdown_text(s: &str) -> String {
 }
 
 /// A Markdown table cell: `|` would end it, a line break would end the row.
-fn markdown_cell(s: &str) -> String {
+pub(crate) fn markdown_cell(s: &str) -> String {
     markdown_text(s).replace('|', "\\|").replace('\n', " ")
 }
 
