@@ -97,6 +97,13 @@ fn check(label: &str, p: &Params, seed: u64) {
         0.05,
     );
     expect("friction shape", rel(fr.shape, p.friction.shape), 0.10);
+    // its sigma, widened by the residual's correlation, covers the error within three
+    // sigmas (1.1-1.8 measured here)
+    expect(
+        "shape error / 3 sigma",
+        (fr.shape - p.friction.shape).abs() / (3.0 * fr.sigma_shape),
+        1.0,
+    );
     let k = id.triangles.as_ref().unwrap().stiffness_n_m;
     if p.table.stiffness_n_m == 0.0 {
         report.push(format!("stiffness: {k:.0} N/m (|k| < 2e4)"));

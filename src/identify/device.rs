@@ -14,6 +14,7 @@ use super::friction::bouc_wen_path;
 use super::lsq::{self, minimise, LsqOptions};
 use super::results::{DeviceFit, DeviceTestFit};
 use super::select::DeviceRoles;
+use super::signals::correlation_factor;
 use super::{check_bounds, check_moved, MASS_BOUNDS_KG};
 use crate::campaign::{Campaign, Measured, Record};
 use nalgebra::{DMatrix, DVector};
@@ -43,9 +44,6 @@ pub const DEVICE_YIELD_STARTS: [f64; 5] = [0.003, 0.01, 0.03, 0.1, 0.3];
 pub const DEVICE_YIELD_RESOLUTION: f64 = 0.2;
 /// Bouc-Wen shape constant of the start values (the middle of its range [0, 1)).
 const SHAPE_START: f64 = 0.5;
-/// Longest lag of the residual's autocorrelation summed, samples: 2 s at 1 kHz, beyond
-/// any correlation a device fit's model error leaves (and a bound on the work).
-const MAX_CORRELATION_LAG: usize = 2000;
 /// Points of a hysteresis loop kept for the report (a window around the peak stroke).
 const LOOP_POINTS: usize = 3000;
 
@@ -189,27 +187,6 @@ fn linear_start(k: &Kinematics, yield_m: f64) -> Option<(Vec<f64>, f64)> {
     ))
 }
 
-/// Integrated autocorrelation of the residual, `1 + 2 sum rho_k` up to the first lag whose
-/// correlation is not positive: the factor by which correlated residuals (model error,
-/// oversampling) shrink the information of `n` samples. The covariance of
-/// [`lsq::minimise`] assumes white residuals; its sigma is scaled by the square root.
-fn correlation_factor(r: &[f64]) -> f64 {
-    let n = r.len();
-    let r0: f64 = r.iter().map(|v| v * v).sum();
-    if r0 <= 0.0 {
-        return 1.0;
-    }
-    let mut tau = 1.0;
-    for lag in 1..(n / 10).min(MAX_CORRELATION_LAG) {
-        let rho = r[lag..].iter().zip(r).map(|(a, b)| a * b).sum::<f64>() / r0;
-        if rho <= 0.0 {
-            break;
-        }
-        tau += 2.0 * rho;
-    }
-    tau
-}
-
 /// Force-fit NRMSE of `model` against `k.f`: `RMS(meas - model) / RMS(meas - mean)`.
 fn nrmse(k: &Kinematics, model: &[f64]) -> f64 {
     let e: Vec<f64> = k.f.iter().zip(model).map(|(f, m)| f - m).collect();
@@ -324,7 +301,8 @@ pub fn fit_device(c: &Campaign, roles: &DeviceRoles) -> Result<DeviceFit, Identi
     let p = &fit.theta;
     check_bounds(name, "device mass (kg)", p[5], [0.0, MASS_BOUNDS_KG[1]])?;
     let r: Vec<f64> = k.model(p).iter().zip(&k.f).map(|(m, f)| m - f).collect();
-    let inflate = correlation_factor(&r).sqrt();
+    // a tenth of the record at most: the loop's own period stays out of the sum
+    let inflate = correlation_factor(&r, r.len() / 10).sqrt();
     let sigma: Vec<f64> = fit.sigma.iter().map(|s| s * inflate).collect();
     let others = roles
         .others

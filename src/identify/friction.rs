@@ -4,7 +4,10 @@
 use super::error::IdentifyError;
 use super::lsq::{minimise, LsqOptions};
 use super::results::{FrictionFit, TriangleFit};
-use super::signals::{derivative, fourth_difference_rms, monotone_path, smooth};
+use super::signals::{
+    correlation_factor, derivative, fourth_difference_rms, monotone_path, smooth,
+    MAX_CORRELATION_LAG,
+};
 use super::{
     check_bounds, check_moved, lsq, MIN_SINE_CYCLES, MIN_TRIANGLE_CYCLES, TRIANGLE_FRACTION,
 };
@@ -275,6 +278,11 @@ pub fn fit_friction(
         .collect::<Vec<_>>()
         .join(", ");
     check_moved(&who, "Bouc-Wen fit", &fit, &t0, &scale)?;
+    // the residual is far from white (the table's jitter, the shape's model error at
+    // each reversal): the sigmas are widened by its integrated autocorrelation, as the
+    // closed loop's and the device's are
+    let widen =
+        residual(&fit.theta).map_or(1.0, |r| correlation_factor(&r, MAX_CORRELATION_LAG).sqrt());
     let (fmu, y, b) = (fit.theta[0], fit.theta[1], fit.theta[2]);
     let d0 = &data[0];
     let z = bouc_wen_path(&d0.path, y, b, d0.v[0].signum());
@@ -284,9 +292,9 @@ pub fn fit_friction(
         force_n: fmu,
         yield_displacement_m: y,
         shape: b,
-        sigma_force_n: fit.sigma[0],
-        sigma_yield_displacement_m: fit.sigma[1],
-        sigma_shape: fit.sigma[2],
+        sigma_force_n: widen * fit.sigma[0],
+        sigma_yield_displacement_m: widen * fit.sigma[1],
+        sigma_shape: widen * fit.sigma[2],
         rms_error_n: (fit.cost / fit.residuals as f64).sqrt(),
         displacement_m: d0.x.iter().step_by(step).copied().collect(),
         velocity_m_s: d0.v.iter().step_by(step).copied().collect(),

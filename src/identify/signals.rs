@@ -48,6 +48,32 @@ pub(crate) fn fourth_difference_rms(x: &[f64]) -> f64 {
     centred_rms(&d) / 70f64.sqrt()
 }
 
+/// Longest lag of a residual's autocorrelation summed, samples: 2 s at 1 kHz, beyond any
+/// correlation a fit's model error leaves (and a bound on the work).
+pub(super) const MAX_CORRELATION_LAG: usize = 2000;
+
+/// Integrated autocorrelation of a fit's residual `r`, `1 + 2 sum rho_k` over lags below
+/// `lags` (and [`MAX_CORRELATION_LAG`]) until the first one whose correlation is not
+/// positive: the residual samples per independent one, by which `s^2 (J^T J)^-1`
+/// understates the covariance of a fit to correlated residuals (model error,
+/// oversampling). Its square root widens the sigmas; 1 for white or silent residuals.
+pub(super) fn correlation_factor(r: &[f64], lags: usize) -> f64 {
+    let n = r.len();
+    let r0: f64 = r.iter().map(|v| v * v).sum();
+    if n < 2 || r0 <= 0.0 {
+        return 1.0;
+    }
+    let mut sum = 0.0;
+    for lag in 1..lags.min(MAX_CORRELATION_LAG).min(n - 1) {
+        let rho = r.iter().zip(&r[lag..]).map(|(a, b)| a * b).sum::<f64>() / r0;
+        if rho <= 0.0 {
+            break;
+        }
+        sum += rho;
+    }
+    1.0 + 2.0 * sum
+}
+
 /// RMS of `x` about its mean (its standard deviation); 0 for no samples.
 pub(crate) fn centred_rms(x: &[f64]) -> f64 {
     let n = x.len().max(1) as f64;

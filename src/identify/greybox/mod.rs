@@ -28,6 +28,7 @@ pub use structure::{mass_separable, Convention, Known};
 
 use super::error::IdentifyError;
 use super::lsq::{minimise, LsqFit, LsqOptions};
+use super::signals::{correlation_factor, MAX_CORRELATION_LAG};
 use crate::campaign::{Campaign, Measured};
 use crate::params::Params;
 use crate::solver::Checks;
@@ -51,9 +52,6 @@ const FINAL_ITERATIONS: usize = 40;
 const MAX_RESIDUALS_PER_CHANNEL: usize = 50_000;
 /// Relative cost decrease below which the fit stops.
 const TOLERANCE: f64 = 1e-7;
-/// Lags over which the residual's autocorrelation is summed for the covariance's
-/// widening (beyond them a fitted loop's residual has decorrelated).
-const MAX_CORRELATION_LAG: usize = 2000;
 
 /// A freed parameter's estimate.
 #[derive(Debug, Clone, Serialize)]
@@ -194,7 +192,7 @@ fn valve_order(
     };
     let fit2 = run_lsq(&q2, c, full, &s2.free, FINAL_ITERATIONS);
     let r = residuals(&fitted, c, full).unwrap_or_default();
-    let n = r.len() as f64 / correlation_factor(&r);
+    let n = r.len() as f64 / correlation_factor(&r, MAX_CORRELATION_LAG);
     let mut order = ValveOrder {
         chosen: "first_order",
         first_order_cost: fit.cost,
@@ -226,7 +224,7 @@ fn finish(
 ) -> ClosedLoopFit {
     let params = with_search(from, &s.free, &fit.theta);
     let factor = residuals(&params, c, targets)
-        .map(|r| correlation_factor(&r))
+        .map(|r| correlation_factor(&r, MAX_CORRELATION_LAG))
         .unwrap_or(1.0);
     let cov = fit.covariance.as_ref().map(|m| m * factor);
     let estimates = s
@@ -440,26 +438,6 @@ fn valve_at_bound(p: &Params, free: &[GreyParameter]) -> bool {
 /// Levenberg-Marquardt stops a step short of a bound it pushes against.
 const VALVE_BOUND_MARGIN: f64 = 0.01;
 
-/// `1 + 2 sum rho_k` over the residual's autocorrelation until it first falls below
-/// zero: the number of residual samples per independent one, by which `s^2 (J^T J)^-1`
-/// understates the covariance of a fit to correlated residuals.
-fn correlation_factor(r: &[f64]) -> f64 {
-    let n = r.len();
-    let r0: f64 = r.iter().map(|v| v * v).sum();
-    if n < 2 || r0 <= 0.0 {
-        return 1.0;
-    }
-    let mut sum = 0.0;
-    for lag in 1..MAX_CORRELATION_LAG.min(n - 1) {
-        let rho = r.iter().zip(&r[lag..]).map(|(a, b)| a * b).sum::<f64>() / r0;
-        if rho <= 0.0 {
-            break;
-        }
-        sum += rho;
-    }
-    1.0 + 2.0 * sum
-}
-
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -469,13 +447,13 @@ mod tests {
         use rand::{Rng, SeedableRng};
         let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(3);
         let white: Vec<f64> = (0..20_000).map(|_| rng.gen_range(-1.0..1.0)).collect();
-        let f = correlation_factor(&white);
+        let f = correlation_factor(&white, MAX_CORRELATION_LAG);
         assert!(f < 1.2, "{f}");
         // a moving average over 10 samples: about 10 samples per independent one
         let smooth: Vec<f64> = (0..white.len() - 10)
             .map(|k| white[k..k + 10].iter().sum::<f64>())
             .collect();
-        let f = correlation_factor(&smooth);
+        let f = correlation_factor(&smooth, MAX_CORRELATION_LAG);
         assert!((7.0..13.0).contains(&f), "{f}");
     }
 }
