@@ -6,7 +6,7 @@
 use crate::campaign::Campaign;
 use crate::diagnose::{padded, simulate_test, CellResponse, Channel, Diagnosis, Part};
 use crate::identify::frf::{Welch, WelchOptions};
-use crate::report::page::markdown_cell;
+use crate::report::page::{html_table, markdown_cell, markdown_table, Table};
 use crate::report::plot::{bode_png, xy_png, BodeCurve, Series};
 use crate::report::{escape_html, markdown_code, safe_file_name};
 use std::fmt::Write as _;
@@ -298,42 +298,25 @@ fn write_fits(html: &mut String, md: &mut String, d: &Diagnosis) {
         most a noise-free simulation of the true table reaches with the noise the channel \
         shows at rest.";
     let pct = |x: Option<f64>| x.map_or("-".to_string(), |x| format!("{x:.2}"));
-    let _ = write!(
-        html,
-        "<h2>Measured against simulated (report quarters)</h2><p>{}</p><table><tr>\
-         <th>test</th><th>channel</th><th>baseline fit %</th><th>extended fit %</th>\
-         <th>noise allows %</th></tr>",
-        escape_html(WHAT)
-    );
-    let _ = write!(
-        md,
-        "\n## Measured against simulated (report quarters)\n\n{WHAT}\n\n| test | channel | \
-         baseline fit % | extended fit % | noise allows % |\n|---|---|---|---|---|\n"
-    );
+    let mut t = Table::new(&[
+        "test",
+        "channel",
+        "baseline fit %",
+        "extended fit %",
+        "noise allows %",
+    ]);
     for f in &d.fits {
-        let cells = [
+        t.push(vec![
+            f.test.clone(),
+            f.channel.to_string(),
             pct(f.baseline_fit_percent),
             pct(f.extended_fit_percent),
             pct(f.noise_ceiling_percent),
-        ];
-        let _ = write!(
-            html,
-            "<tr><td>{}</td><td>{}</td><td>{}</td><td>{}</td><td>{}</td></tr>",
-            escape_html(&f.test),
-            f.channel,
-            cells[0],
-            cells[1],
-            cells[2]
-        );
-        let _ = writeln!(
-            md,
-            "| {} | {} | {} | {} | {} |",
-            markdown_cell(&f.test),
-            f.channel,
-            cells[0],
-            cells[1],
-            cells[2]
-        );
+        ]);
     }
-    html.push_str("</table>");
+    const TITLE: &str = "Measured against simulated (report quarters)";
+    let _ = write!(html, "<h2>{TITLE}</h2><p>{}</p>", escape_html(WHAT));
+    html_table(&t, html);
+    let _ = write!(md, "\n## {TITLE}\n\n{WHAT}\n\n");
+    markdown_table(&t, md);
 }

@@ -73,7 +73,7 @@ pub(crate) fn markdown_cell(s: &str) -> String {
     markdown_text(s).replace('|', "\\|").replace('\n', " ")
 }
 
-fn markdown_table(t: &Table, md: &mut String) {
+pub(crate) fn markdown_table(t: &Table, md: &mut String) {
     let row = |cells: &[String]| {
         let cells: Vec<String> = cells.iter().map(|c| markdown_cell(c)).collect();
         format!("| {} |\n", cells.join(" | "))
@@ -112,7 +112,7 @@ pub fn markdown(title: &str, sections: &[Section]) -> String {
     md
 }
 
-fn html_table(t: &Table, html: &mut String) {
+pub(crate) fn html_table(t: &Table, html: &mut String) {
     html.push_str("<table><tr>");
     for h in &t.header {
         let _ = write!(html, "<th>{}</th>", escape_html(h));
