@@ -89,6 +89,9 @@ pub struct ChannelMedian {
     /// Median and tests counted, of the baseline; `None` when no run got through.
     pub baseline: Option<(f64, usize)>,
     pub extended: Option<(f64, usize)>,
+    /// The same of the noise ceilings (the slow tests' acceleration is mostly noise, and
+    /// pulls every median of it down).
+    pub noise_ceiling: Option<(f64, usize)>,
 }
 
 /// [`ChannelMedian`] of every channel in `fits`.
@@ -107,6 +110,10 @@ pub fn medians_by_channel(fits: &[ModelFit]) -> Vec<ChannelMedian> {
                 channel,
                 baseline: of(here.iter().filter_map(|f| f.baseline_fit_percent).collect()),
                 extended: of(here.iter().filter_map(|f| f.extended_fit_percent).collect()),
+                noise_ceiling: of(here
+                    .iter()
+                    .filter_map(|f| f.noise_ceiling_percent)
+                    .collect()),
             })
         })
         .collect()

@@ -204,10 +204,11 @@ pub fn run(args: Args) -> anyhow::Result<()> {
     };
     for m in shaketable::diagnose::medians_by_channel(&d.fits) {
         println!(
-            "  fit of {} on the report quarters: baseline {}, extended {}",
+            "  fit of {} on the report quarters: baseline {}, extended {}; the noise at rest allows {}",
             m.channel,
             median(m.baseline),
-            median(m.extended)
+            median(m.extended),
+            median(m.noise_ceiling)
         );
     }
     if let Some(note) = d.structure_change() {
