@@ -19,7 +19,6 @@ use crate::campaign::Campaign;
 use crate::identify::lsq::minimise;
 use crate::params::Params;
 use rayon::prelude::*;
-use std::collections::BTreeMap;
 
 /// The figures of `p` ([`PartRows`]) on the selection and report quarters of every test
 /// of `tests`, per test and channel, from one prediction per test.
@@ -379,13 +378,7 @@ pub(super) fn scored_candidate(
     let p = fitted.params;
     let (select, report) = heldout_scores(&p, c, heldout_idx, noise, Some(hold));
     let parameters = e.keyed(fitted.theta);
-    // a sigma the data cannot bound stays (infinite or NaN): it is no evidence
-    let sigma: BTreeMap<String, f64> = e
-        .parameters()
-        .iter()
-        .zip(fitted.sigma)
-        .map(|(k, x)| (k.to_string(), *x))
-        .collect();
+    let sigma = e.sigma_map(fitted.sigma);
     let (lower, upper) = fitted.bounds;
     let why = not_evidence(e, &parameters, &sigma, lower, upper);
     Candidate {

@@ -187,6 +187,16 @@ impl Effect {
             .collect()
     }
 
+    /// The one-sigma uncertainties `sigma` of its parameters by name, every one kept: a
+    /// sigma the data cannot bound stays infinite or NaN, which says it is no evidence.
+    pub(super) fn sigma_map(self, sigma: &[f64]) -> std::collections::BTreeMap<String, f64> {
+        self.parameters()
+            .iter()
+            .zip(sigma)
+            .map(|(k, x)| (k.to_string(), *x))
+            .collect()
+    }
+
     /// Switch the effect on in `p` with its parameters `theta`.
     pub(super) fn apply(self, p: &mut Params, theta: &[f64]) {
         let e = self.catalogue();

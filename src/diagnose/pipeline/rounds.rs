@@ -261,13 +261,7 @@ impl<'a> Diagnoser<'a> {
             cause.effect.apply(&mut section4, &theta);
             cause.parameters = cause.effect.keyed(&theta);
             if let Some((_, sigma)) = best.refitted_sigma.iter().find(|(e, _)| *e == cause.effect) {
-                cause.sigma = cause
-                    .effect
-                    .parameters()
-                    .iter()
-                    .map(|k| k.to_string())
-                    .zip(sigma.iter().copied())
-                    .collect();
+                cause.sigma = cause.effect.sigma_map(sigma);
             }
         }
         if mass_is_scale(self.c) {
