@@ -45,6 +45,9 @@ const MAX_DEPTH: usize = 32;
 const MAX_DIMS: usize = 32;
 /// Longest struct field name slot: MATLAB writes 32 or 64 bytes.
 pub(super) const MAX_FIELD_NAME_LEN: usize = 4096;
+/// Inflated bytes read to find the name of a compressed variable the file cuts short: its
+/// flags, dimensions and name take a few dozen bytes (a 4096-byte field-name slot at most).
+const PEEK_INFLATED_BYTES: u64 = 8192;
 /// Most elements of a struct array without fields (which take no bytes to store).
 pub(super) const MAX_FIELDLESS_ELEMENTS: usize = 1 << 20;
 
@@ -179,12 +182,17 @@ impl<'f> Parser<'f> {
         let mut variables = Vec::new();
         let mut pos = HEADER_LEN;
         while !only_padding_left(bytes, pos) {
-            let el = self.element(bytes, &mut pos, bytes.len())?;
+            let at = pos;
+            let el = self
+                .element(bytes, &mut pos, bytes.len())
+                .map_err(|e| self.name_cut_variable(bytes, at, e))?;
             match el.mi_type {
                 MI_MATRIX => variables.push(self.matrix(bytes, el, 0)?),
                 MI_COMPRESSED => {
                     pos = el.end; // compressed elements are not padded
-                    let inflated = self.inflate(bytes, el)?;
+                    let inflated = self
+                        .inflate(bytes, el)
+                        .map_err(|e| self.name_cut_variable(bytes, at, e))?;
                     self.compressed_at = Some(el.at);
                     let mut inner = 0;
                     while !only_padding_left(&inflated, inner) {
@@ -203,6 +211,68 @@ impl<'f> Parser<'f> {
         }
         variables.retain(|(name, _)| !name.is_empty());
         Ok(variables)
+    }
+
+    /// Error `e` about the top-level element at `at` (a file cut inside it, a zlib stream
+    /// that ends early or inflates past the budget) with the name of the variable it holds,
+    /// when its first bytes give it.
+    fn name_cut_variable(&self, bytes: &[u8], at: usize, e: MatError) -> MatError {
+        match (e, self.peek_name(bytes, at)) {
+            (
+                MatError::Malformed {
+                    file,
+                    context,
+                    at,
+                    why,
+                },
+                Some(name),
+            ) if context.is_empty() => MatError::Malformed {
+                file,
+                context: format!("variable `{name}`, "),
+                at,
+                why,
+            },
+            (e, _) => e,
+        }
+    }
+
+    /// The name of the variable whose top-level element starts at `at`, read from its
+    /// first bytes only (inflating at most [`PEEK_INFLATED_BYTES`] of a compressed one).
+    fn peek_name(&self, bytes: &[u8], at: usize) -> Option<String> {
+        let mi_type = self.u32_at(bytes, at, bytes.len()).ok()?;
+        let data = bytes.get(at.checked_add(8)?..)?;
+        match mi_type {
+            MI_MATRIX => self.name_of_matrix(data, 0),
+            MI_COMPRESSED => {
+                let mut head = Vec::new();
+                // a stream cut short still yields the bytes before the cut
+                let _ = flate2::read::ZlibDecoder::new(data)
+                    .take(PEEK_INFLATED_BYTES)
+                    .read_to_end(&mut head);
+                (self.u32_at(&head, 0, head.len()).ok()? == MI_MATRIX)
+                    .then(|| self.name_of_matrix(&head, 8))
+                    .flatten()
+            }
+            _ => None,
+        }
+    }
+
+    /// The name of the miMATRIX whose data starts at `pos` of `buf` (flags, dimensions, name).
+    fn name_of_matrix(&self, buf: &[u8], mut pos: usize) -> Option<String> {
+        let end = buf.len();
+        self.expect(buf, &mut pos, end, &[MI_UINT32], "the array flags")
+            .ok()?;
+        self.dims(buf, &mut pos, end).ok()?;
+        let name = self
+            .expect(
+                buf,
+                &mut pos,
+                end,
+                &[MI_INT8, MI_UINT8, MI_UTF8],
+                "the name",
+            )
+            .ok()?;
+        Some(text_until_nul(&buf[name.data_at..name.end])).filter(|n| !n.is_empty())
     }
 
     /// The zlib stream of a compressed element, within the file's inflated-bytes budget.

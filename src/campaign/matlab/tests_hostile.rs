@@ -95,6 +95,27 @@ fn every_truncation_is_an_error_or_a_cut_between_variables() {
 }
 
 #[test]
+fn a_file_cut_inside_a_variable_names_it() {
+    let samples: Vec<f64> = (0..1000).map(f64::from).collect();
+    let first = matrix(6, &[1, 2], "v", &doubles(&[1.0, 2.0]));
+    let accel = matrix(6, &[1, 1000], "accel", &doubles(&samples));
+    let at = 128 + first.len();
+    let whole = file(&[first.clone(), accel.clone()]);
+    let e = err(&whole[..whole.len() - 3000]);
+    assert!(
+        e.starts_with(&format!("x.mat: variable `accel`, byte {at}: element of ")),
+        "{e}"
+    );
+    // compressed: the name is in the first inflated bytes of a stream cut short
+    let packed = file(&[first, element(15, &zlib(&accel))]);
+    let e = err(&packed[..packed.len() - 40]);
+    assert!(e.contains("variable `accel`"), "{e}");
+    // a cut inside the tag itself leaves no name to give
+    let e = err(&whole[..at + 6]);
+    assert!(!e.contains("variable"), "{e}");
+}
+
+#[test]
 fn size_past_the_end_names_the_offset() {
     let mut bytes = file(&[]);
     bytes.extend_from_slice(&[14, 0, 0, 0, 0xf0, 0xff, 0xff, 0xff]);
@@ -152,7 +173,7 @@ fn zlib_bomb_stops_at_the_budget() {
         .to_string();
     assert_eq!(
         e,
-        "bomb.mat: byte 128: compressed variables inflate to more than 4096 bytes in all"
+        "bomb.mat: variable `z`, byte 128: compressed variables inflate to more than 4096 bytes in all"
     );
     assert_eq!(
         read_mat(&bytes, "ok.mat")
