@@ -180,9 +180,10 @@ fn map_columns(t: &mut CsvTable, plan: &ReadPlan, file: &str) -> Result<Mapped, 
                 file,
                 t.header_line.max(1),
                 format!(
-                    "column `{}` (mapped to `{channel}`) not found; the columns are: {}",
+                    "column `{}` (mapped to `{channel}`) not found; the columns are: {}{}",
                     m.column,
-                    t.names.join(", ")
+                    t.names.join(", "),
+                    delimiter_hint(t, plan.read.delimiter)
                 ),
             ));
         };
@@ -236,6 +237,41 @@ fn map_columns(t: &mut CsvTable, plan: &ReadPlan, file: &str) -> Result<Mapped, 
         sources,
         unread,
     })
+}
+
+/// Other delimiters a header read as a single column may hold, in the order they are
+/// suggested: a `;` export read at `,` still shows its spaces, so the characters come
+/// before whitespace.
+const OTHER_DELIMITERS: [(Delimiter, &str); 4] = [
+    (Delimiter::Char(';'), "\";\""),
+    (Delimiter::Char('\t'), "\"\\t\""),
+    (Delimiter::Char(','), "\",\""),
+    (Delimiter::Whitespace, "\"whitespace\""),
+];
+
+/// When the header was read as one column that holds another common delimiter, the hint
+/// that the file seems to use it (a `;` export read at the default `,`); else empty.
+fn delimiter_hint(t: &CsvTable, used: Delimiter) -> String {
+    let [header] = t.names.as_slice() else {
+        return String::new();
+    };
+    if t.header_line == 0 {
+        return String::new();
+    }
+    let splits = |d: Delimiter| match d {
+        Delimiter::Char(c) => header.split(c).filter(|f| !f.trim().is_empty()).count() > 1,
+        Delimiter::Whitespace => header.split_whitespace().count() > 1,
+    };
+    match OTHER_DELIMITERS
+        .iter()
+        .find(|(d, _)| *d != used && splits(*d))
+    {
+        Some((_, shown)) => format!(
+            " (the header is one column holding {shown}: the file seems to use {shown} as its \
+             delimiter; set `[read] delimiter = {shown}`, or the test's `read = {{ delimiter = {shown} }}`)"
+        ),
+        None => String::new(),
+    }
 }
 
 /// The measured responses a lab-form test needs at least one of (campaign-format.md).

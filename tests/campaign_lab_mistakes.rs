@@ -1,0 +1,71 @@
+//! Mistakes in reading a laboratory's recordings that must be named, not read silently
+//! (campaign-format.md, "Recordings as laboratories make them", "Bad input in this form"):
+//! a file read at the wrong delimiter, a misspelled channel key, and a campaign whose time
+//! base is a time column rather than `sample_rate_hz`.
+
+use shaketable::campaign::format::read_campaign;
+use std::f64::consts::PI;
+use std::path::Path;
+
+/// Samples of the hand-made lab export: 2 s at 1 kHz.
+const SAMPLES: usize = 2000;
+const RATE_HZ: f64 = 1000.0;
+
+/// A lab export separated by `;`: time in ms, the reference and the LVDT in mm, the
+/// accelerometer in g (a 1-Hz sine of 10 mm).
+fn lab_text() -> String {
+    let mut s = String::from("Time_ms;REF_mm;LVDT_mm;ACC_g\n");
+    for k in 0..SAMPLES {
+        let t = k as f64 / RATE_HZ;
+        let x = 10.0 * (2.0 * PI * t).sin();
+        let a = -(2.0 * PI).powi(2) * x / 1000.0 / 9.80665;
+        s.push_str(&format!("{};{x};{};{a}\n", 1000.0 * t, 0.99 * x));
+    }
+    s
+}
+
+/// The `[columns]` of the lab export, without a time column.
+const COLUMNS: &str = "[columns]\nref_displacement_m = { column = \"REF_mm\", scale = 0.001 }\n\
+    displacement_m = { column = \"LVDT_mm\", scale = 0.001 }\n\
+    acceleration_m_s2 = { column = \"ACC_g\", scale = 9.80665 }\n";
+
+const TEST: &str =
+    "\n[[test]]\nname = \"sine\"\nfile = \"sine.txt\"\nkind = \"record\"\ncontrol = \"displacement\"\n";
+
+/// A campaign folder `dir` holding the lab export and `toml` as campaign.toml.
+fn write(dir: &Path, toml: &str) {
+    std::fs::create_dir_all(dir).unwrap();
+    std::fs::write(dir.join("sine.txt"), lab_text()).unwrap();
+    std::fs::write(dir.join("campaign.toml"), toml).unwrap();
+}
+
+fn read_error(toml: &str) -> String {
+    let tmp = tempfile::tempdir().unwrap();
+    write(tmp.path(), toml);
+    match read_campaign(tmp.path()) {
+        Ok(_) => String::new(),
+        Err(e) => e.to_string(),
+    }
+}
+
+#[test]
+fn a_header_read_as_one_column_suggests_its_delimiter() {
+    let with = |read: &str| format!("sample_rate_hz = 1000.0\n{read}{COLUMNS}{TEST}");
+    assert_eq!(read_error(&with("[read]\ndelimiter = \";\"\n")), "");
+    let e = read_error(&with(""));
+    assert!(
+        e.contains("column `ACC_g` (mapped to `acceleration_m_s2`) not found")
+            && e.contains("the columns are: Time_ms;REF_mm;LVDT_mm;ACC_g"),
+        "{e}"
+    );
+    assert!(
+        e.contains("the file seems to use \";\" as its delimiter; set `[read] delimiter = \";\"`"),
+        "{e}"
+    );
+    // a header split into several columns is a plain missing column: no hint
+    let e = read_error(&with("[read]\ndelimiter = \";\"\n").replace("LVDT_mm\"", "LVDT\""));
+    assert!(
+        e.contains("column `LVDT` (mapped to") && !e.contains("seems to use"),
+        "{e}"
+    );
+}
