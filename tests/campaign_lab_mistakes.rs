@@ -69,3 +69,70 @@ fn a_header_read_as_one_column_suggests_its_delimiter() {
         "{e}"
     );
 }
+
+/// The time column of the lab export, in ms.
+const TIME_MS: &str = "time_s = { column = \"Time_ms\", scale = 0.001 }\n";
+
+#[test]
+fn a_mapped_time_column_is_a_time_base_without_sample_rate_hz() {
+    let read = "[read]\ndelimiter = \";\"\n";
+    let tmp = tempfile::tempdir().unwrap();
+    write(tmp.path(), &format!("{read}{COLUMNS}{TIME_MS}{TEST}"));
+    let c = read_campaign(tmp.path()).unwrap();
+    assert_eq!(c.info.sample_rate_hz, RATE_HZ);
+    assert_eq!(c.sample_rate_for(&c.info.tests[0]), RATE_HZ);
+    assert_eq!(c.records[0].len(), SAMPLES);
+    assert!((c.records[0].time_s[1] - 1e-3).abs() < 1e-15);
+    let info = shaketable::campaign::format::read_campaign_info(tmp.path()).unwrap();
+    assert_eq!(info.sample_rate_for(&info.tests[0]), RATE_HZ);
+    // per test: the test maps its own time column
+    let per_test = format!(
+        "{read}{COLUMNS}{}columns = {{ {} }}\n",
+        TEST,
+        TIME_MS.trim()
+    );
+    write(tmp.path(), &per_test);
+    let c = read_campaign(tmp.path()).unwrap();
+    assert_eq!(c.sample_rate_for(&c.info.tests[0]), RATE_HZ);
+    // neither a rate nor a time column: the missing key, the test and the way out
+    let e = read_error(&format!("{read}{COLUMNS}{TEST}"));
+    assert!(
+        e.contains("test `sine`: key `sample_rate_hz`: required key is missing")
+            && e.contains("`time_s`"),
+        "{e}"
+    );
+    // the project's own form still needs its rate
+    let e = read_error(TEST);
+    assert!(
+        e.contains("key `sample_rate_hz`: required key is missing"),
+        "{e}"
+    );
+}
+
+#[test]
+fn a_rate_from_the_time_column_is_checked_like_a_given_one() {
+    let toml = |test_extra: &str| {
+        format!("[read]\ndelimiter = \";\"\n{COLUMNS}{TIME_MS}{TEST}{test_extra}")
+    };
+    let tmp = tempfile::tempdir().unwrap();
+    write(tmp.path(), &toml(""));
+    // a sample 0.3 ms late is non-uniform time, named at its line
+    let text = lab_text().replacen("\n100;", "\n100.3;", 1);
+    std::fs::write(tmp.path().join("sine.txt"), text).unwrap();
+    let e = read_campaign(tmp.path()).unwrap_err().to_string();
+    assert!(e.contains("sine.txt: line 102: non-uniform time"), "{e}");
+    // a frequency above the Nyquist frequency of the time column's rate
+    let sine = toml("").replace("kind = \"record\"", "kind = \"sine\"");
+    let e = read_error(&(sine.clone() + "frequency_hz = 600.0\namplitude_m = 0.01\n"));
+    assert!(
+        e.contains("test `sine`: key `frequency_hz`: 600 Hz is above the Nyquist frequency 500 Hz of the test's time column"),
+        "{e}"
+    );
+    assert_eq!(
+        read_error(&(sine + "frequency_hz = 1.0\namplitude_m = 0.01\n")),
+        ""
+    );
+    // a given rate still has to agree with the time column
+    let e = read_error(&format!("sample_rate_hz = 1024.0\n{}", toml("")));
+    assert!(e.contains("sample rate disagrees"), "{e}");
+}

@@ -121,8 +121,9 @@ pub struct ReadPlan {
     /// False for the project's own form (no `[read]` or `[columns]` anywhere): every
     /// cell must be a number and every channel of the first form is required as is.
     pub lab_form: bool,
-    /// The test's rate: its own `sample_rate_hz`, else the campaign's.
-    pub sample_rate_hz: f64,
+    /// The test's rate: its own `sample_rate_hz`, else the campaign's; `None` when
+    /// campaign.toml gives neither and the rate comes from the mapped time column.
+    pub sample_rate_hz: Option<f64>,
     /// The line of campaign.toml giving the test's own `sample_rate_hz`, if it has one
     /// (named when the time column disagrees with it).
     pub own_rate_line: Option<usize>,
@@ -136,7 +137,7 @@ impl ReadPlan {
             read: ReadOptions::default(),
             columns: BTreeMap::new(),
             lab_form: false,
-            sample_rate_hz,
+            sample_rate_hz: Some(sample_rate_hz),
             own_rate_line: None,
             control,
         }
@@ -278,25 +279,35 @@ fn delimiter_hint(t: &CsvTable, used: Delimiter) -> String {
 const RESPONSES: [&str; 2] = ["displacement_m", "acceleration_m_s2"];
 
 /// A lab-form record: the table mapped, the time base checked or made from the rate, the
-/// reference derivatives computed from the recorded reference; and where each channel
-/// came from.
+/// reference derivatives computed from the recorded reference; where each channel came
+/// from; and the record's sample rate (the plan's, else its time column's).
 pub(super) fn record_from_lab_table(
     mut t: CsvTable,
     plan: &ReadPlan,
     file: &str,
     rate_source: &str,
-) -> Result<(Record, Sources), CampaignError> {
+) -> Result<(Record, Sources, f64), CampaignError> {
     let mut m = map_columns(&mut t, plan, file)?;
-    let fs = plan.sample_rate_hz;
     let n = t.row_lines.len();
-    let time_s = match m.take("time_s") {
-        Some(time) => {
-            check_time(&t, &time, Some(fs), rate_source, file)?;
-            time
-        }
-        None => (0..n).map(|k| k as f64 / fs).collect(),
-    };
     let line = t.header_line.max(1);
+    let (time_s, fs) = match (m.take("time_s"), plan.sample_rate_hz) {
+        (Some(time), rate) => {
+            let fs = check_time(&t, &time, rate, rate_source, file)?;
+            (time, plausible_rate(fs, &t, file)?)
+        }
+        (None, Some(fs)) => ((0..n).map(|k| k as f64 / fs).collect(), fs),
+        (None, None) => {
+            return Err(csv_err(
+                file,
+                line,
+                format!(
+                    "no time base: no `time_s` after mapping and no `sample_rate_hz` in \
+                     campaign.toml; the columns are: {}",
+                    t.names.join(", ")
+                ),
+            ))
+        }
+    };
     let (x, v, a) = reference(&mut m, plan.control, fs).map_err(|why| csv_err(file, line, why))?;
     let valve_command = m.take("valve_command");
     let displacement_m = m.take("displacement_m");
@@ -327,8 +338,28 @@ pub(super) fn record_from_lab_table(
         force_n,
         extra: m.channels,
     };
-    let sources = sources_of(&record, m.sources, m.unread, plan);
-    Ok((record, sources))
+    let sources = sources_of(&record, m.sources, m.unread, plan.control, fs);
+    Ok((record, sources, fs))
+}
+
+/// Rates a time column may give: those campaign.toml may (1 Hz to 1 MHz); beyond them the
+/// column's unit is wrong (a column in ms read as seconds gives 1/1000 of the rate, below
+/// 1 Hz for any record sampled under 1 kHz).
+const PLAUSIBLE_RATE_HZ: std::ops::RangeInclusive<f64> = 1.0..=1e6;
+
+/// `fs`, the rate of a time column, if plausible; else the error naming the file.
+fn plausible_rate(fs: f64, t: &CsvTable, file: &str) -> Result<f64, CampaignError> {
+    if PLAUSIBLE_RATE_HZ.contains(&fs) {
+        return Ok(fs);
+    }
+    Err(csv_err(
+        file,
+        t.row_lines.get(1).copied().unwrap_or(t.header_line),
+        format!(
+            "the time column gives {fs} Hz, outside the plausible 1 Hz to 1 MHz: is its unit \
+             seconds? (scale a column in ms with `time_s = {{ column = ..., scale = 0.001 }}`)"
+        ),
+    ))
 }
 
 /// Where each channel of `record` came from: a column (`read`), else made in reading
@@ -337,7 +368,8 @@ fn sources_of(
     record: &Record,
     read: Vec<ChannelSource>,
     unread_columns: Vec<String>,
-    plan: &ReadPlan,
+    control: Control,
+    sample_rate_hz: f64,
 ) -> Sources {
     let channels = record
         .channels()
@@ -345,10 +377,8 @@ fn sources_of(
         .map(|(name, _)| {
             let source = match read.iter().find(|c| c.channel == name) {
                 Some(c) => c.source.clone(),
-                None if name == "time_s" => Source::SampleRate {
-                    sample_rate_hz: plan.sample_rate_hz,
-                },
-                None => Source::computed_reference(plan.control, name),
+                None if name == "time_s" => Source::SampleRate { sample_rate_hz },
+                None => Source::computed_reference(control, name),
             };
             ChannelSource {
                 channel: name.to_string(),

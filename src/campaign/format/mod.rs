@@ -7,12 +7,15 @@
 //!
 //! Choices where the format page is silent:
 //! - campaign.toml: `name` may be omitted (the directory name is used); `sample_rate_hz`
-//!   (the default of every test; a test may give its own, checked by the same rules and
-//!   bounding that test's frequencies), every `[geometry]` key, every `[controller]` gain
-//!   and, per test, `name`, `file`, `kind`, `control` (+ `rms`, `band_hz` for random,
-//!   `frequency_hz`, `amplitude_m` for sine/triangle) are required. Unknown keys are accepted and ignored, except inside
-//!   `[controller]` and a test's `controller = {...}` override, where an unknown gain
-//!   (e.g. a typo `Fv`) would silently change the physics, so it is an error.
+//!   is the default of every test; a test may give its own, checked by the same rules and
+//!   bounding that test's frequencies. In a laboratory's form a test with a mapped `time_s`
+//!   column may have neither: it takes its time column's rate (plausible, 1 Hz to 1 MHz),
+//!   which bounds its frequencies once read. Per test `name`, `file`, `kind`, `control`
+//!   (+ `rms`, `band_hz` for random, `frequency_hz`, `amplitude_m` for sine/triangle) are
+//!   required; `[geometry]` and `[controller]` keys are optional (unknown when missing).
+//!   Unknown keys are accepted and ignored, except inside `[controller]` and a test's
+//!   `controller = {...}` override, where an unknown gain (e.g. a typo `Fv`) would
+//!   silently change the physics, so it is an error.
 //! - Duplicate test names, two tests on one file, and a campaign without tests are errors.
 //! - CSV: blank lines and lines whose first non-blank character is `#` are skipped;
 //!   cells are trimmed and may be double-quoted; a duplicate channel name is an error.
@@ -212,6 +215,7 @@ fn refusal(file: &str, r: Refusal) -> CampaignError {
 mod csv;
 mod integrate;
 pub mod layout;
+mod open;
 mod toml_file;
 mod toml_gains;
 mod toml_layout;
@@ -223,6 +227,7 @@ use csv::*;
 
 use layout::merge_columns;
 pub use layout::{ColumnEntry, ColumnMap, Delimiter, ReadOptions, ReadOverride, ReadPlan};
+pub use open::{read_campaign, read_campaign_info, read_campaign_test};
 pub use toml_file::{parse_campaign_toml, parse_campaign_toml_planned};
 pub use write::*;
 
@@ -241,11 +246,22 @@ pub fn read_record_str(
     sample_rate_hz: f64,
     rate_source: &str,
 ) -> Result<Record, CampaignError> {
+    read_project_form(text, file, Some(sample_rate_hz), rate_source).map(|(r, _)| r)
+}
+
+/// A record in the project's own form and its rate: `sample_rate_hz`, checked against the
+/// time column, or (`None`) the time column's.
+fn read_project_form(
+    text: &str,
+    file: &str,
+    sample_rate_hz: Option<f64>,
+    rate_source: &str,
+) -> Result<(Record, f64), CampaignError> {
     let table = parse_csv(text, file, &ReadOptions::default(), true)?;
     require_channels(&table, &REQUIRED_CHANNELS, file)?;
     let time = &table.columns[table.index("time_s").unwrap_or(0)];
-    check_time(&table, time, Some(sample_rate_hz), rate_source, file)?;
-    Ok(record_from_table(table))
+    let fs = check_time(&table, time, sample_rate_hz, rate_source, file)?;
+    Ok((record_from_table(table), fs))
 }
 
 /// One test's text read under its [`ReadPlan`]: the project's form as
@@ -257,29 +273,39 @@ pub fn read_record_planned(
     plan: &ReadPlan,
     rate_source: &str,
 ) -> Result<(Record, Sources), CampaignError> {
+    read_planned_rate(text, file, plan, rate_source).map(|(r, s, _)| (r, s))
+}
+
+/// [`read_record_planned`] with the record's rate (the plan's, else its time column's).
+fn read_planned_rate(
+    text: &str,
+    file: &str,
+    plan: &ReadPlan,
+    rate_source: &str,
+) -> Result<(Record, Sources, f64), CampaignError> {
     if !plan.lab_form {
-        let r = read_record_str(text, file, plan.sample_rate_hz, rate_source)?;
+        let (r, fs) = read_project_form(text, file, plan.sample_rate_hz, rate_source)?;
         let sources = Sources::same_columns(&r);
-        return Ok((r, sources));
+        return Ok((r, sources, fs));
     }
     let table = parse_csv(text, file, &plan.read, false)?;
     layout::record_from_lab_table(table, plan, file, rate_source)
 }
 
 /// A test's file (at `real`, shown as `shown`) read under its plan: a MATLAB file when it
-/// ends in `.mat` ([`matlab_table`]), text otherwise.
+/// ends in `.mat` ([`matlab_table`]), text otherwise; with the record's rate.
 fn read_test_file(
     real: &Path,
     shown: &str,
     plan: &ReadPlan,
     rate_source: &str,
-) -> Result<(Record, Sources), CampaignError> {
+) -> Result<(Record, Sources, f64), CampaignError> {
     let is_mat = real
         .extension()
         .is_some_and(|e| e.eq_ignore_ascii_case("mat"));
     if !is_mat {
         let text = read_text(real, false).map_err(|e| rename_file(e, shown))?;
-        return read_record_planned(&text, shown, plan, rate_source);
+        return read_planned_rate(&text, shown, plan, rate_source);
     }
     let bytes = read_regular(real, MAX_RECORD_BYTES, "largest plausible record")
         .map_err(|r| refusal(shown, r))?;
@@ -431,151 +457,6 @@ fn read_toml_text(root: &Path, dir: &Path) -> Result<(String, String), CampaignE
         });
     }
     Ok((read_text(&path, true)?, file))
-}
-
-/// Read and check `dir/campaign.toml` only (records are not opened).
-pub fn read_campaign_info(dir: &Path) -> Result<CampaignInfo, CampaignError> {
-    let root = campaign_root(dir)?;
-    let (text, file) = read_toml_text(&root, dir)?;
-    Ok(parse_campaign_toml(&text, &file, &dir_name(dir))?.0)
-}
-
-/// Where each test's file is, checked before any record is read: inside the campaign
-/// folder after resolving symlinks, a regular file within [`MAX_RECORD_BYTES`], and not
-/// the file of another test nor campaign.toml (same device and inode: symlinks and hard
-/// links included). Errors point at the test's `file` key.
-fn locate_test_files(
-    root: &Path,
-    dir: &Path,
-    info: &CampaignInfo,
-    file_lines: &[usize],
-    plans: &[ReadPlan],
-    toml_file: &str,
-) -> Result<Vec<PathBuf>, CampaignError> {
-    use std::os::unix::fs::MetadataExt;
-    let identity = |m: &std::fs::Metadata| (m.dev(), m.ino());
-    let toml_id = std::fs::metadata(dir.join("campaign.toml"))
-        .ok()
-        .map(|m| identity(&m));
-    let mut seen: Vec<((u64, u64), usize)> = Vec::new();
-    let mut paths = Vec::with_capacity(info.tests.len());
-    for (i, (spec, &line)) in info.tests.iter().zip(file_lines).enumerate() {
-        let err = |message: String| CampaignError::Toml {
-            file: toml_file.to_string(),
-            line: Some(line),
-            test: Some(spec.name.clone()),
-            key: Some("file".to_string()),
-            message,
-        };
-        let path = dir.join(&spec.file);
-        let shown = display(&path);
-        let real = match resolve_inside(root, dir, &spec.file) {
-            Ok(real) => real,
-            Err(Some(real)) => {
-                return Err(err(format!(
-                    "`{}` resolves to {}, outside the campaign folder {}; a test file must be inside it (not opened)",
-                    spec.file,
-                    real.display(),
-                    root.display()
-                )))
-            }
-            Err(None) => path.clone(),
-        };
-        let meta =
-            std::fs::metadata(&real).map_err(|e| err(format!("cannot read {shown}: {e}")))?;
-        if !meta.file_type().is_file() || meta.len() > MAX_RECORD_BYTES {
-            let r = read_regular(&real, MAX_RECORD_BYTES, "largest plausible record");
-            let why = r.err().map_or_else(String::new, |r| r.to_string());
-            return Err(err(format!("{shown} {why}")));
-        }
-        let id = identity(&meta);
-        if Some(id) == toml_id {
-            return Err(err(format!(
-                "{shown} is campaign.toml itself, not a record"
-            )));
-        }
-        // a laboratory's file may hold several tests, each read from its own columns
-        let same_source = |j: usize| !plans[i].lab_form || plans[j].columns == plans[i].columns;
-        if let Some(&(_, j)) = seen.iter().find(|(s, j)| *s == id && same_source(*j)) {
-            return Err(err(format!(
-                "{shown} is the same file as `{}` of test `{}` (line {}): one file per test",
-                info.tests[j].file, info.tests[j].name, file_lines[j]
-            )));
-        }
-        seen.push((id, i));
-        paths.push(real);
-    }
-    Ok(paths)
-}
-
-/// Where test `spec`'s rate comes from, for a time column that disagrees with it:
-/// campaign.toml, with the line, test and key of the test's own `sample_rate_hz` when it
-/// has one (campaign-format.md, "Bad input in this form").
-fn rate_source(plan: &ReadPlan, toml_file: &str, spec: &TestSpec) -> String {
-    match plan.own_rate_line {
-        Some(line) => format!(
-            "{toml_file} line {line} (test `{}`, key `sample_rate_hz`)",
-            spec.name
-        ),
-        None => toml_file.to_string(),
-    }
-}
-
-/// Read a whole campaign: campaign.toml and every record it lists, in parallel.
-pub fn read_campaign(dir: &Path) -> Result<Campaign, CampaignError> {
-    let root = campaign_root(dir)?;
-    let (text, toml_file) = read_toml_text(&root, dir)?;
-    let (info, file_lines, plans) = parse_campaign_toml_planned(&text, &toml_file, &dir_name(dir))?;
-    let real = locate_test_files(&root, dir, &info, &file_lines, &plans, &toml_file)?;
-    let results: Vec<Result<(Record, Sources), CampaignError>> = info
-        .tests
-        .par_iter()
-        .zip(real.par_iter())
-        .zip(plans.par_iter())
-        .map(|((spec, real), plan)| {
-            let shown = display(&dir.join(&spec.file));
-            read_test_file(real, &shown, plan, &rate_source(plan, &toml_file, spec))
-        })
-        .collect();
-    let mut records = Vec::with_capacity(results.len());
-    let mut sources = super::provenance::SourcesByTest::new();
-    for (r, spec) in results.into_iter().zip(&info.tests) {
-        let (record, s) = r?;
-        records.push(record);
-        sources.insert(spec.name.clone(), s);
-    }
-    Ok(Campaign {
-        dir: dir.to_path_buf(),
-        info,
-        records,
-        sources,
-    })
-}
-
-/// One test of a campaign, by name: the campaign's description and the test's record,
-/// read under its plan (every test file is located and checked; only this one is read).
-pub fn read_campaign_test(dir: &Path, name: &str) -> Result<(CampaignInfo, Record), CampaignError> {
-    let root = campaign_root(dir)?;
-    let (text, toml_file) = read_toml_text(&root, dir)?;
-    let (info, file_lines, plans) = parse_campaign_toml_planned(&text, &toml_file, &dir_name(dir))?;
-    let Some(i) = info.tests.iter().position(|t| t.name == name) else {
-        let names: Vec<&str> = info.tests.iter().map(|t| t.name.as_str()).collect();
-        return Err(CampaignError::Toml {
-            file: toml_file,
-            line: None,
-            test: Some(name.to_string()),
-            key: None,
-            message: format!(
-                "no such test; the campaign's tests are {}",
-                names.join(", ")
-            ),
-        });
-    };
-    let real = locate_test_files(&root, dir, &info, &file_lines, &plans, &toml_file)?;
-    let shown = display(&dir.join(&info.tests[i].file));
-    let source = rate_source(&plans[i], &toml_file, &info.tests[i]);
-    let (record, _) = read_test_file(&real[i], &shown, &plans[i], &source)?;
-    Ok((info, record))
 }
 
 /// The same error naming `file` (the path as campaign.toml gives it, not the resolved one).

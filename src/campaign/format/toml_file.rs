@@ -28,10 +28,28 @@ pub fn parse_campaign_toml(
 }
 
 /// [`parse_campaign_toml`] with each test's [`ReadPlan`]: how its file is read.
+///
+/// In a laboratory's form a test may take its rate from a mapped time column instead of
+/// `sample_rate_hz` (campaign-format.md, "What is required": a time column, or
+/// `sample_rate_hz`): its plan's rate is then `None`, and so are the Nyquist checks of its
+/// frequencies until the rate is known ([`parse_with_time_rates`]). When campaign.toml
+/// gives no `sample_rate_hz` at all, the info's is NaN until the records are read.
 pub fn parse_campaign_toml_planned(
     text: &str,
     file: &str,
     default_name: &str,
+) -> Result<(CampaignInfo, Vec<usize>, Vec<ReadPlan>), CampaignError> {
+    parse_with_time_rates(text, file, default_name, &[])
+}
+
+/// [`parse_campaign_toml_planned`] with the rates read from the time columns of the tests
+/// that give none (`time_rates[i]` for test `i`; empty: none known yet): the tests'
+/// frequencies and bands are checked against them.
+pub(super) fn parse_with_time_rates(
+    text: &str,
+    file: &str,
+    default_name: &str,
+    time_rates: &[Option<f64>],
 ) -> Result<(CampaignInfo, Vec<usize>, Vec<ReadPlan>), CampaignError> {
     // classic Mac line ends (a lone CR) read as line ends; offsets are unchanged
     let text = lone_cr_to_lf(text);
@@ -60,17 +78,11 @@ pub fn parse_campaign_toml_planned(
         },
         None => default_name.to_string(),
     };
-    let sample_rate_hz = match &doc.sample_rate_hz {
-        Some(v) => number(&lines, v, None, "sample_rate_hz", SAMPLE_RATE_HZ)?,
-        None => {
-            return Err(lines.err(
-                None,
-                None,
-                Some("sample_rate_hz"),
-                "required key is missing (the sampling rate of every record, Hz)",
-            ))
-        }
-    };
+    let sample_rate_hz = doc
+        .sample_rate_hz
+        .as_ref()
+        .map(|v| number(&lines, v, None, "sample_rate_hz", SAMPLE_RATE_HZ))
+        .transpose()?;
     // every key of [geometry] and [controller] is optional: one not given is unknown
     let geometry = match &doc.geometry {
         Some(g) => {
@@ -127,12 +139,21 @@ pub fn parse_campaign_toml_planned(
         || raw_tests.get_ref().iter().any(|t| {
             lookup(t.get_ref(), "read").is_some() || lookup(t.get_ref(), "columns").is_some()
         });
+    if sample_rate_hz.is_none() && !lab_form {
+        return Err(lines.err(
+            None,
+            None,
+            Some("sample_rate_hz"),
+            "required key is missing (the sampling rate of every record, Hz)",
+        ));
+    }
     let mut tests: Vec<TestSpec> = Vec::new();
     let mut plans: Vec<ReadPlan> = Vec::new();
     let mut file_lines = Vec::new();
     let mut header_lines: Vec<usize> = Vec::new();
     for (i, raw) in raw_tests.get_ref().iter().enumerate() {
-        let (spec, file_off) = read_test(&lines, raw, i, sample_rate_hz)?;
+        let time_rate = time_rates.get(i).copied().flatten();
+        let (spec, file_off) = read_test(&lines, raw, i, sample_rate_hz, time_rate)?;
         let here = lines.line(raw.span().start);
         let mut plan = test_plan(
             &lines,
@@ -143,6 +164,16 @@ pub fn parse_campaign_toml_planned(
             &campaign_columns,
         )?;
         plan.lab_form = lab_form;
+        if plan.sample_rate_hz.is_none() && !plan.columns.contains_key("time_s") {
+            return Err(lines.err(
+                Some(raw.span().start),
+                Some(&spec.name),
+                Some("sample_rate_hz"),
+                "required key is missing: the test has no time base; give `sample_rate_hz` \
+                 (campaign-wide or the test's own), or map its time column as `time_s` in \
+                 [columns] (e.g. `time_s = { column = \"Time_ms\", scale = 0.001 }`)",
+            ));
+        }
         if let Some(j) = tests.iter().position(|t| t.name == spec.name) {
             return Err(lines.err(
                 Some(raw.span().start),
@@ -185,7 +216,7 @@ pub fn parse_campaign_toml_planned(
     Ok((
         CampaignInfo {
             name,
-            sample_rate_hz,
+            sample_rate_hz: sample_rate_hz.unwrap_or(f64::NAN),
             geometry,
             controller,
             tests,
@@ -200,7 +231,7 @@ fn test_plan(
     lines: &Lines,
     raw: &Spanned<RawTable>,
     spec: &TestSpec,
-    sample_rate_hz: f64,
+    sample_rate_hz: Option<f64>,
     campaign_read: &ReadOverride,
     campaign_columns: &BTreeMap<String, ColumnEntry>,
 ) -> Result<ReadPlan, CampaignError> {
@@ -227,7 +258,7 @@ fn test_plan(
             .merged(&test_read),
         columns,
         lab_form: false,
-        sample_rate_hz: spec.sample_rate_hz.unwrap_or(sample_rate_hz),
+        sample_rate_hz: spec.sample_rate_hz.or(sample_rate_hz),
         own_rate_line,
         control: spec.control,
     })
@@ -260,11 +291,11 @@ mod tests {
         assert_eq!(b.sample_rate_hz, None);
         assert_eq!(info.sample_rate_for(a), 1000.0);
         assert_eq!(info.sample_rate_for(b), 512.0);
-        assert_eq!(plans[0].sample_rate_hz, 1000.0);
+        assert_eq!(plans[0].sample_rate_hz, Some(1000.0));
         assert_eq!(plans[0].own_rate_line, Some(10));
         assert_eq!(
             (plans[1].sample_rate_hz, plans[1].own_rate_line),
-            (512.0, None)
+            (Some(512.0), None)
         );
     }
 

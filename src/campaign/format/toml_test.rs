@@ -29,12 +29,14 @@ pub(super) fn check_test_file(
 
 /// One `[[test]]` entry; `campaign_rate_hz` is the campaign's `sample_rate_hz`, the
 /// test's own (campaign-format.md, "campaign.toml additions") replaces it for the test's
-/// Nyquist checks.
+/// Nyquist checks; `time_rate_hz`, the rate of its time column once read, is the last
+/// resort (no rate known: the checks wait for it).
 pub(super) fn read_test(
     lines: &Lines,
     raw: &Spanned<RawTable>,
     index: usize,
-    campaign_rate_hz: f64,
+    campaign_rate_hz: Option<f64>,
+    time_rate_hz: Option<f64>,
 ) -> Result<(TestSpec, usize), CampaignError> {
     let off = raw.span().start;
     let t = raw.get_ref();
@@ -113,7 +115,13 @@ pub(super) fn read_test(
     };
     // the test's own rate, checked like the campaign's; its Nyquist bounds the test
     spec.sample_rate_hz = optional("sample_rate_hz", SAMPLE_RATE_HZ)?;
-    let sample_rate_hz = spec.sample_rate_hz.unwrap_or(campaign_rate_hz);
+    let (sample_rate_hz, rate_name) = match (spec.sample_rate_hz.or(campaign_rate_hz), time_rate_hz)
+    {
+        (Some(fs), _) => (fs, "sample_rate_hz"),
+        (None, Some(fs)) => (fs, "the test's time column"),
+        // no rate yet: no frequency is above a Nyquist frequency not known
+        (None, None) => (f64::INFINITY, ""),
+    };
     spec.rms = optional("rms", level)?;
     spec.frequency_hz = optional("frequency_hz", TEST_FREQUENCY_HZ)?;
     spec.amplitude_m = optional("amplitude_m", DISPLACEMENT_M)?;
@@ -124,7 +132,7 @@ pub(super) fn read_test(
             tn,
             Some("frequency_hz"),
             format!(
-                "{f} Hz is above the Nyquist frequency {} Hz of sample_rate_hz",
+                "{f} Hz is above the Nyquist frequency {} Hz of {rate_name}",
                 sample_rate_hz / 2.0
             ),
         ));
@@ -154,7 +162,7 @@ pub(super) fn read_test(
         }
         if hi > sample_rate_hz / 2.0 {
             return Err(bad(format!(
-                "[{lo}, {hi}]: the band goes above the Nyquist frequency {} Hz of sample_rate_hz",
+                "[{lo}, {hi}]: the band goes above the Nyquist frequency {} Hz of {rate_name}",
                 sample_rate_hz / 2.0
             )));
         }
