@@ -136,3 +136,77 @@ fn a_rate_from_the_time_column_is_checked_like_a_given_one() {
     let e = read_error(&format!("sample_rate_hz = 1024.0\n{}", toml("")));
     assert!(e.contains("sample rate disagrees"), "{e}");
 }
+
+#[test]
+fn a_misspelled_channel_is_named_with_the_channel_it_probably_means() {
+    use shaketable::campaign::channel_names::NameOrigin;
+    let read = "sample_rate_hz = 1000.0\n[read]\ndelimiter = \";\"\n";
+    let typo = COLUMNS.replace("\ndisplacement_m =", "\ndisplacment_m =");
+    let tmp = tempfile::tempdir().unwrap();
+    let dir = tmp.path().join("typo");
+    write(&dir, &format!("{read}{typo}{TEST}"));
+    let c = read_campaign(&dir).unwrap();
+    assert!(
+        c.records[0].displacement_m.is_none(),
+        "kept as a further channel"
+    );
+    let misses = c.near_misses();
+    assert_eq!(misses.len(), 1, "{misses:?}");
+    let m = &misses[0];
+    assert_eq!(
+        (m.name.as_str(), m.channel, m.edits, m.tests.as_slice()),
+        (
+            "displacment_m",
+            "displacement_m",
+            1,
+            ["sine".to_string()].as_slice()
+        )
+    );
+    assert_eq!(
+        m.origin,
+        NameOrigin::ColumnsKey {
+            column: "LVDT_mm".into()
+        }
+    );
+    // `campaign check` says so instead of "every rule holds" alone
+    let o = std::process::Command::new(env!("CARGO_BIN_EXE_shaketable"))
+        .args(["campaign", "check", dir.to_str().unwrap()])
+        .output()
+        .unwrap();
+    let out = String::from_utf8_lossy(&o.stdout);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    assert!(
+        out.contains("warning: [columns] key `displacment_m` (column `LVDT_mm`) is no channel name but is 1 edit from `displacement_m`, which test `sine` does not read"),
+        "{out}"
+    );
+    assert!(
+        out.contains("every rule of the format holds, but 1 channel name looks misspelled"),
+        "{out}"
+    );
+    // a file column kept under a misspelled project name is named too
+    let mapped = COLUMNS.replace(
+        "displacement_m = { column = \"LVDT_mm\", scale = 0.001 }\n",
+        "",
+    );
+    write(&dir, &format!("{read}{mapped}{TEST}"));
+    let text = lab_text().replacen("LVDT_mm", "Displacement_m", 1);
+    std::fs::write(dir.join("sine.txt"), text).unwrap();
+    let misses = read_campaign(&dir).unwrap().near_misses();
+    assert_eq!(misses.len(), 1, "{misses:?}");
+    assert_eq!(
+        (misses[0].edits, &misses[0].origin),
+        (0, &NameOrigin::FileColumn)
+    );
+    // a lab's own further channels are no misspelling, nor one beside the channel it resembles
+    let own = format!(
+        "{read}{COLUMNS}pressure_a_pa = \"LVDT_mm\"\ndisplacement_mm = \"LVDT_mm\"\n{TEST}"
+    );
+    write(&dir, &own);
+    let c = read_campaign(&dir).unwrap();
+    assert_eq!(
+        c.records[0].extra.len(),
+        3,
+        "Time_ms, pressure_a_pa, displacement_mm"
+    );
+    assert!(c.near_misses().is_empty(), "{:?}", c.near_misses());
+}

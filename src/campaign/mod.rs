@@ -4,6 +4,7 @@
 //! disk with every bad-input rule of the format page; `synth` writes the paper's test
 //! program from any parameter set with seeded in-loop sensor noise.
 
+pub mod channel_names;
 pub mod files;
 pub mod format;
 pub mod init;

@@ -262,6 +262,14 @@ fn own_rates(info: &shaketable::campaign::CampaignInfo) -> String {
     }
 }
 
+/// The channel names of `c` that look like misspelled project channels, as warnings on
+/// stderr (for the commands that go on to use the campaign: `identify`, `diagnose`).
+pub fn warn_near_misses(c: &shaketable::campaign::Campaign) {
+    for m in c.near_misses() {
+        eprintln!("warning: {m}");
+    }
+}
+
 fn run_check(a: CheckArgs) -> anyhow::Result<()> {
     let c = read_campaign(&a.dir).with_context(|| format!("campaign {}", a.dir.display()))?;
     println!(
@@ -275,8 +283,17 @@ fn run_check(a: CheckArgs) -> anyhow::Result<()> {
     let read = &screening.read;
     print!("{}", shaketable::report::read::text(read));
     let total: f64 = read.tests.iter().map(|t| t.duration_s).sum();
+    let near_misses = c.near_misses();
+    for m in &near_misses {
+        println!("warning: {m}");
+    }
+    let doubts = match near_misses.len() {
+        0 => String::new(),
+        1 => ", but 1 channel name looks misspelled (warning above)".to_string(),
+        n => format!(", but {n} channel names look misspelled (warnings above)"),
+    };
     println!(
-        "{} tests, {total:.3} s of table time: every rule of the format holds",
+        "{} tests, {total:.3} s of table time: every rule of the format holds{doubts}",
         read.tests.len()
     );
     print!(

@@ -38,6 +38,7 @@ pub struct Args {
 pub fn run(args: Args) -> anyhow::Result<()> {
     let t0 = std::time::Instant::now();
     let campaign = read_campaign(&args.campaign)?;
+    crate::campaign::warn_near_misses(&campaign);
     let inputs = crate::outputs::campaign_inputs(&campaign);
     let outputs = crate::outputs::Outputs::check(
         "diagnose",

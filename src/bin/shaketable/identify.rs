@@ -32,6 +32,7 @@ pub struct Args {
 pub fn run(args: Args) -> anyhow::Result<()> {
     let t0 = std::time::Instant::now();
     let campaign = read_campaign(&args.campaign)?;
+    crate::campaign::warn_near_misses(&campaign);
     let mut inputs = crate::outputs::campaign_inputs(&campaign);
     let truth_path = args.truth.clone().or_else(|| {
         Some(args.campaign.join(shaketable::campaign::synth::TRUTH_FILE)).filter(|p| p.exists())
