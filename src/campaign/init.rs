@@ -1,10 +1,14 @@
 //! `campaign init`: a campaign.toml skeleton for the files a laboratory has
 //! (campaign-format.md, "Finding out what a file holds"). Each text file is sniffed from
 //! its first lines: the delimiter, the header line, its columns with a few values, and a
-//! sample rate from the acquisition software's preamble or from a time column. The
-//! channel mapping is left to the user, commented, with what was found beside it.
+//! sample rate from the acquisition software's preamble or from a time column. A MATLAB
+//! file is read whole (`init/mat.rs`): its variables, matrix columns and dSPACE signals.
+//! The channel mapping is left to the user, commented, with what was found beside it.
+//! Every file not described is listed with the reason.
 
 use super::files::{decode_utf8, lines_any, read_head};
+
+mod mat;
 use std::fmt::Write as _;
 use std::path::{Path, PathBuf};
 
@@ -12,6 +16,9 @@ use std::path::{Path, PathBuf};
 const HEAD_BYTES: u64 = 256 * 1024;
 /// Rows looked at to choose the delimiter and find where the data starts.
 const SNIFF_ROWS: usize = 200;
+/// A guessed rate this close (relative) to a whole number of Hz is that number: the
+/// rounding of a step such as 0.001 s in binary, not a real offset.
+const RATE_ROUNDING: f64 = 1e-9;
 /// Values shown per column.
 const SAMPLE_VALUES: usize = 3;
 /// Files larger than this are not records anyone exports as text or MAT (a disk image,
@@ -22,20 +29,32 @@ const MAX_FILE_BYTES: u64 = super::files::MAX_RECORD_BYTES;
 #[derive(Debug, Clone, PartialEq)]
 pub struct Sniffed {
     pub file: String,
-    pub delimiter: &'static str,
-    /// 1-based line of the column names; 0: no header.
-    pub header_line: usize,
+    /// How a text file is read; `None` for a MATLAB file.
+    pub read: Option<TextRead>,
     pub columns: Vec<ColumnSample>,
     /// A sample rate and where it came from.
     pub sample_rate: Option<(f64, String)>,
 }
 
+/// How a text file is read: its `[read]` keys.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct TextRead {
+    pub delimiter: &'static str,
+    /// 1-based line of the column names; 0: no header.
+    pub header_line: usize,
+}
+
 #[derive(Debug, Clone, PartialEq)]
 pub struct ColumnSample {
+    /// What a `column` key names: a text column's header, a MATLAB variable, `matrix:k`,
+    /// a dSPACE signal's name or block path.
     pub name: String,
     /// The first values as written (numbers or text).
     pub values: Vec<String>,
     pub numeric: bool,
+    /// What else is known of it (a MATLAB file: its size, a dSPACE signal's block path,
+    /// unit and time vector); empty for a text column.
+    pub note: String,
 }
 
 /// A file that was not sniffed, and why.
@@ -113,6 +132,7 @@ pub fn sniff_text(file: &str, text: &str) -> Option<Sniffed> {
                     .map(|c| c.to_string())
                     .collect(),
                 numeric: cells.iter().filter(|c| !c.is_empty()).all(|c| is_number(c)),
+                note: String::new(),
             }
         })
         .collect();
@@ -120,8 +140,10 @@ pub fn sniff_text(file: &str, text: &str) -> Option<Sniffed> {
         preamble_rate(&lines[..first_data]).or_else(|| time_column_rate(&names, &rows));
     Some(Sniffed {
         file: file.to_string(),
-        delimiter,
-        header_line: header.map_or(0, |i| i + 1),
+        read: Some(TextRead {
+            delimiter,
+            header_line: header.map_or(0, |i| i + 1),
+        }),
         columns,
         sample_rate,
     })
@@ -152,28 +174,42 @@ fn preamble_rate(preamble: &[&str]) -> Option<(f64, String)> {
     None
 }
 
-/// The rate of a column named like time, from its median step (seconds assumed).
-fn time_column_rate(names: &[String], rows: &[Vec<&str>]) -> Option<(f64, String)> {
-    let j = names.iter().position(|n| {
-        let n = n.to_ascii_lowercase();
-        n == "t" || n.starts_with("time") || n.starts_with("zeit") || n.starts_with("tiempo")
-    })?;
-    let t: Vec<f64> = rows
-        .iter()
-        .filter_map(|r| r.get(j).and_then(|c| c.trim().parse::<f64>().ok()))
-        .collect();
+/// Whether a column or variable is named like time (`t`, `Time_ms`, `Zeit`, `tiempo`).
+fn is_time_name(name: &str) -> bool {
+    let n = name.to_ascii_lowercase();
+    n == "t" || n.starts_with("time") || n.starts_with("zeit") || n.starts_with("tiempo")
+}
+
+/// The rate of times `t` (seconds assumed) from their median positive step.
+fn median_step_rate(t: &[f64]) -> Option<f64> {
     let mut steps: Vec<f64> = t
         .windows(2)
         .map(|w| w[1] - w[0])
-        .filter(|s| *s > 0.0)
+        .filter(|s| s.is_finite() && *s > 0.0)
         .collect();
     if steps.is_empty() {
         return None;
     }
     steps.sort_by(f64::total_cmp);
-    let step = steps[steps.len() / 2];
+    let fs = 1.0 / steps[steps.len() / 2];
+    // a step of 0.001 s written in binary is 999.9999999999991 Hz: the rate meant is 1000
+    let whole = fs.round();
+    Some(if (fs - whole).abs() < RATE_ROUNDING * fs {
+        whole
+    } else {
+        fs
+    })
+}
+
+/// The rate of a column named like time, from its median step (seconds assumed).
+fn time_column_rate(names: &[String], rows: &[Vec<&str>]) -> Option<(f64, String)> {
+    let j = names.iter().position(|n| is_time_name(n))?;
+    let t: Vec<f64> = rows
+        .iter()
+        .filter_map(|r| r.get(j).and_then(|c| c.trim().parse::<f64>().ok()))
+        .collect();
     Some((
-        1.0 / step,
+        median_step_rate(&t)?,
         format!(
             "the median step of column `{}`, read as seconds (set its scale if it is not)",
             names[j]
@@ -211,11 +247,11 @@ fn sniff_file(path: &Path, name: &str) -> Result<Sniffed, String> {
         return Err(format!("{len} bytes, larger than any plausible record"));
     }
     let head = read_head(path, HEAD_BYTES).map_err(|r| r.to_string())?;
-    if head.starts_with(b"MATLAB") {
-        return Err(
-            "a MATLAB file: list its variables with a MAT reader (not in this version of init)"
-                .into(),
-        );
+    let mat_name = Path::new(name)
+        .extension()
+        .is_some_and(|e| e.eq_ignore_ascii_case("mat"));
+    if head.starts_with(b"MATLAB") || mat_name {
+        return mat::sniff_mat_file(path, name);
     }
     let mut head = head;
     // a head cut inside a multi-byte character or a line: keep whole lines
@@ -259,12 +295,14 @@ pub fn skeleton(name: &str, found: &[Sniffed], skipped: &[Skipped]) -> String {
     }
     s.push_str(GEOMETRY_AND_CONTROLLER);
     let common = most_common_read(found);
-    let _ = writeln!(
-        s,
-        "\n[read]\ndelimiter = {}\nheader_line = {}",
-        toml::Value::String(common.0.to_string()),
-        common.1
-    );
+    if let Some(r) = common {
+        let _ = writeln!(
+            s,
+            "\n[read]\ndelimiter = {}\nheader_line = {}",
+            toml::Value::String(r.delimiter.to_string()),
+            r.header_line
+        );
+    }
     s.push_str(COLUMNS_HELP);
     let campaign_rate = rate.as_ref().map(|(fs, _)| *fs);
     for f in found {
@@ -276,25 +314,22 @@ pub fn skeleton(name: &str, found: &[Sniffed], skipped: &[Skipped]) -> String {
     s
 }
 
-fn most_common_read(found: &[Sniffed]) -> (&'static str, usize) {
-    let mut counts: Vec<((&'static str, usize), usize)> = Vec::new();
-    for f in found {
-        let key = (f.delimiter, f.header_line);
+/// The `[read]` of most text files; `None` when there is no text file.
+fn most_common_read(found: &[Sniffed]) -> Option<TextRead> {
+    let mut counts: Vec<(TextRead, usize)> = Vec::new();
+    for key in found.iter().filter_map(|f| f.read) {
         match counts.iter_mut().find(|(k, _)| *k == key) {
             Some((_, n)) => *n += 1,
             None => counts.push((key, 1)),
         }
     }
-    counts
-        .iter()
-        .max_by_key(|(_, n)| *n)
-        .map_or((",", 1), |(k, _)| *k)
+    counts.iter().max_by_key(|(_, n)| *n).map(|(k, _)| *k)
 }
 
 /// The `[[test]]` entry of file `f`; its own `sample_rate_hz` when the rate guessed from
 /// it differs from the campaign's `campaign_rate` (campaign-format.md: a test may set its
 /// own).
-fn test_entry(f: &Sniffed, common: (&'static str, usize), campaign_rate: Option<f64>) -> String {
+fn test_entry(f: &Sniffed, common: Option<TextRead>, campaign_rate: Option<f64>) -> String {
     let mut s = String::new();
     let stem = Path::new(&f.file)
         .file_stem()
@@ -324,18 +359,29 @@ fn test_entry(f: &Sniffed, common: (&'static str, usize), campaign_rate: Option<
             from.replace('"', "'")
         );
     }
-    if (f.delimiter, f.header_line) != common {
+    if let (None, Some(fs)) = (&f.sample_rate, campaign_rate) {
+        let _ = writeln!(
+            s,
+            "# sample_rate_hz = {fs:?}    # FILL IN if not the campaign's: no rate found in {}",
+            f.file
+        );
+    }
+    let Some(read) = f.read else {
+        s.push_str(&mat::listing(f));
+        return s;
+    };
+    if Some(read) != common {
         let _ = writeln!(
             s,
             "read = {{ delimiter = {}, header_line = {} }}",
-            toml::Value::String(f.delimiter.to_string()),
-            f.header_line
+            toml::Value::String(read.delimiter.to_string()),
+            read.header_line
         );
     }
     let _ = writeln!(
         s,
         "# columns of {} (header line {}):",
-        f.file, f.header_line
+        f.file, read.header_line
     );
     for c in &f.columns {
         let kind = if c.numeric { "" } else { " (text)" };
@@ -364,7 +410,7 @@ const GEOMETRY_AND_CONTROLLER: &str = r#"
 const COLUMNS_HELP: &str = r#"
 [columns]
 # project channel = { column = "lab column", scale = ..., offset = ... }: value = scale * (raw - offset)
-# time_s = { column = "Time", scale = 0.001 }                 # absent: time from sample_rate_hz
+# time_s = { column = "Time", scale = 0.001 }                 # absent: time from sample_rate_hz; present: sample_rate_hz may go
 # ref_displacement_m = { column = "...", scale = 0.01 }       # or ref_acceleration_m_s2 for acceleration control
 # displacement_m = { column = "...", scale = 0.01 }
 # acceleration_m_s2 = { column = "...", scale = 9.80665 }
@@ -377,12 +423,19 @@ const COLUMNS_HELP: &str = r#"
 mod tests {
     use super::*;
 
+    fn read(delimiter: &'static str, header_line: usize) -> TextRead {
+        TextRead {
+            delimiter,
+            header_line,
+        }
+    }
+
     const DAQ: &str = "Header Size:  7\nVersion:  2\nSampling Interval:  0.001\nSampling Rate:  1000\nSample Count:  3\nDevice Serial Number:  0\nSample Number, Date/Time, CHANNEL0, CHANNEL1, CHANNEL2, Events\n         1,   06/29/2022 04:05:36.674 PM, -0.0209, -0.0166, -0.0169, DAQ Start\n         2,   06/29/2022 04:05:36.675 PM, -0.0221, -0.0166, -0.0167\n         3,   06/29/2022 04:05:36.676 PM, -0.0221, -0.0175, -0.0176\n";
 
     #[test]
     fn a_daq_export_is_sniffed() {
         let s = sniff_text("0A.txt", DAQ).unwrap();
-        assert_eq!((s.delimiter, s.header_line), (",", 7));
+        assert_eq!(s.read, Some(read(",", 7)));
         let names: Vec<&str> = s.columns.iter().map(|c| c.name.as_str()).collect();
         assert_eq!(
             names,
@@ -404,12 +457,12 @@ mod tests {
     fn whitespace_without_header_and_a_time_column() {
         let text = "0.000 1.0 2.0\n0.002 1.1 2.1\n0.004 1.2 2.2\n";
         let s = sniff_text("x.dat", text).unwrap();
-        assert_eq!((s.delimiter, s.header_line), ("whitespace", 0));
+        assert_eq!(s.read, Some(read("whitespace", 0)));
         assert_eq!(s.columns.len(), 3);
         assert!(s.sample_rate.is_none(), "no column is named like time");
         let text = "time;x;y\n0.000;1.0;2.0\n0.002;1.1;2.1\n0.004;1.2;2.2\n";
         let s = sniff_text("y.csv", text).unwrap();
-        assert_eq!((s.delimiter, s.header_line), (";", 1));
+        assert_eq!(s.read, Some(read(";", 1)));
         let (fs, _) = s.sample_rate.unwrap();
         assert!((fs - 500.0).abs() < 1e-9, "{fs}");
     }

@@ -23,10 +23,15 @@ pub fn run_init(a: InitArgs) -> anyhow::Result<()> {
     let (found, skipped) =
         sniff_dir(&a.dir).with_context(|| format!("{}: cannot list", a.dir.display()))?;
     if found.is_empty() {
+        let why: Vec<String> = skipped
+            .iter()
+            .map(|s| format!("\n  skipped {}: {}", s.file, s.why))
+            .collect();
         anyhow::bail!(
-            "{}: no file with rows of numbers found ({} skipped)",
+            "{}: no file with rows of numbers or MATLAB signals found ({} skipped){}",
             a.dir.display(),
-            skipped.len()
+            skipped.len(),
+            why.concat()
         );
     }
     let name = a
