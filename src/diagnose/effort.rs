@@ -17,13 +17,8 @@ pub enum Effort {
 }
 
 /// Output-error iterations of the baseline's refinement: a baseline that lacks an effect
-/// never converges, and 8 bring a clean campaign's to its noise floor. Under the fits'
-/// robust loss a channel no parameter can meet (an accelerometer 8 % high) no longer
-/// pulls the table mass, which must then walk back from the section-4 estimate (38.1 to
-/// 41.2 t): 8 iterations left it at 39.3 t and every candidate, even one whose effect
-/// vanished, gained on the baseline by refining it further, so a 1 % stick-slip was
-/// named; 16 bring it there.
-const BASELINE_ITERATIONS: usize = 16;
+/// never converges, and 8 bring a clean campaign's to its noise floor.
+const BASELINE_ITERATIONS: usize = 8;
 
 /// The same for a baseline fitted to the motion ([`super::baseline::from_motion`]): the
 /// closed-loop fit ran on excerpts and its estimation tests, and its parameters move far

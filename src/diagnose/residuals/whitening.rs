@@ -104,8 +104,7 @@ impl Whitening {
     }
 
     /// The weighted DCT coefficients of the residual of `sim` (a run over `part`) on test
-    /// `i`, each channel's scaled to its robust loss ([`robust_scale`]), appended to
-    /// `out`.
+    /// `i`, appended to `out`.
     pub fn residuals(&self, c: &Campaign, i: usize, sim: &[Outputs], out: &mut Vec<f64>) {
         let (Some(part), Some(w)) = (self.part, self.weights.get(i)) else {
             return;
@@ -121,9 +120,7 @@ impl Whitening {
                 .clone()
                 .map(|k| m[k] - ch.simulated(&sim[k]))
                 .collect();
-            let cell: Vec<f64> = weighted(&x, wc).collect();
-            let scale = robust_scale(cell.iter().map(|v| v * v).sum());
-            out.extend(cell.into_iter().map(|v| v * scale));
+            out.extend(weighted(&x, wc));
         }
     }
 
@@ -158,28 +155,6 @@ impl Whitening {
         }
         out
     }
-}
-
-/// Scale of the robust loss, in the band-normalised residual's squared units: a cell
-/// (test, channel) within 3 noise RMS, twice the missed cells' threshold of 1.5, is
-/// fitted as plain least squares; one beyond it counts as an outlier, its pull falling
-/// as `1 / (1 + C / c^2)`.
-const ROBUST_SCALE_SQUARED: f64 = 9.0;
-
-/// The factor that turns a cell's weighted coefficients, squared sum `cell`, into the
-/// Cauchy loss `c^2 ln(1 + cell / c^2)`: a misfit that no parameter of the model can
-/// take out (a recording's calibration 3 % off, physics outside the model) no longer
-/// outweighs every cell the model does meet. With plain least squares an LVDT recording
-/// 3 % low bent the refined table 10 % heavier, the oil column 25 % softer and the
-/// friction to twice its force to shave its slow sines, and left the acceleration and
-/// force, which were right, hundreds of noise RMS off. Cells at the noise are weighted
-/// alike (`1 / (1 + 1 / 9)`), so a model that meets the data keeps its optimum.
-fn robust_scale(cell: f64) -> f64 {
-    if cell <= 0.0 || !cell.is_finite() {
-        return 1.0;
-    }
-    let c2 = ROBUST_SCALE_SQUARED;
-    (c2 * (cell / c2).ln_1p() / cell).sqrt()
 }
 
 /// The DCT coefficients of `x` that `weights` weigh, weighted: what the fits' residual
