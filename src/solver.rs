@@ -141,6 +141,34 @@ pub struct Simulator {
     pub max_substep_s: f64,
     /// What [`Simulator::diverged`] checks.
     pub checks: Checks,
+    /// Modulus of the fastest closed-loop pole at rest, rad/s ([`fastest_pole_rad_s`]):
+    /// the sub-steps resolve it.
+    fastest_pole_rad_s: f64,
+}
+
+/// Largest product of the sub-step and the fastest closed-loop pole at rest: RK4 is
+/// stable up to about 2.8 on a real pole and on an undamped oscillator; 2 keeps a margin,
+/// and a mode that fast is over within a few sub-steps (the physical modes of a table sit
+/// far below it). A fitted valve or oil column can be far faster than the TREES Lab
+/// table's: a second-order valve at 219 Hz with damping 4.1, fitted on the UTFSM
+/// actuator, has a pole at 11 000 rad/s, 11 times what a 1/1024-s sub-step holds, and
+/// every run of it diverged. The TREES Lab table's fastest pole (about 180 rad/s) is far
+/// below what the default sub-step holds (6144 rad/s), so its runs are unchanged.
+pub const POLE_STEP: f64 = 2.0;
+
+/// Modulus of the fastest pole of the closed loop linearised at rest (rad/s), 0 when it
+/// cannot be computed. The delay valve is taken as its first-order lag (the delay is
+/// not a state of the simulation).
+fn fastest_pole_rad_s(model: &Model) -> f64 {
+    let mut p = model.params;
+    if p.servovalve.model == crate::params::ServovalveModel::Delay {
+        p.servovalve.model = crate::params::ServovalveModel::FirstOrder;
+    }
+    crate::linear::Linearisation::new(&p)
+        .poles()
+        .and_then(|poles| poles.last().map(|z| z.norm()))
+        .filter(|r| r.is_finite())
+        .unwrap_or(0.0)
 }
 
 /// What stops a run ([`Simulator::diverged`]).
@@ -180,7 +208,9 @@ impl Simulator {
     /// A table at rest at time `start_s`.
     pub fn new(model: Model, start_s: f64, max_substep_s: f64) -> Simulator {
         let state = model.rest_state();
+        let fastest_pole_rad_s = fastest_pole_rad_s(&model);
         Simulator {
+            fastest_pole_rad_s,
             model,
             state,
             time_s: start_s,
@@ -273,7 +303,7 @@ impl Simulator {
     }
 
     /// Number of sub-steps used for an interval of `dt_s`: at most `max_substep_s` each,
-    /// and short enough for the Bouc-Wen equation (eq. 4.15), whose rate near `|Z| = 1` is
+    /// short enough for the fastest pole at rest ([`POLE_STEP`]), and for the Bouc-Wen equation (eq. 4.15), whose rate near `|Z| = 1` is
     /// about `2 |v| / Y`: RK4 is stable for `h * rate < 2.78`; the guard keeps it below 1
     /// (it only acts for a small yield displacement or a fast table: with the defaults,
     /// Y = 1 mm, from 1.5 m/s at 1/3072 s).
@@ -285,7 +315,8 @@ impl Simulator {
         let friction_rate = 2.0 * v * self.model.friction.inv_yield;
         // free play: the rod ringing on its contact ([`Model::contact_rate_rad_s`])
         let contact = (dt_s * self.model.contact_rate_rad_s() / CONTACT_STEP_RAD).ceil();
-        let guard = (dt_s * friction_rate).ceil().max(contact);
+        let poles = (dt_s * self.fastest_pole_rad_s / POLE_STEP).ceil();
+        let guard = (dt_s * friction_rate).ceil().max(contact).max(poles);
         // a non-finite guard (non-finite state) falls back to the base count
         let n = if guard.is_finite() {
             base.max(guard)

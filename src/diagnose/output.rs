@@ -153,6 +153,8 @@ pub struct Diagnosis {
     pub specimen_visibility: Option<Visibility>,
     /// Why the best candidate was not taken as the cause though it scored (unphysical).
     pub cause_rejected: Option<String>,
+    /// Why no search ran, when the refined baseline could not be scored on any test.
+    pub baseline_unscorable: Option<String>,
     /// No report cell the baseline missed is still missed ([`super::EXPLAINED_RATIO`]).
     pub explained: bool,
     /// Report residual of the baseline over the extended model's, on the baseline's
@@ -326,6 +328,7 @@ impl Diagnosis {
             "effort": self.effort.name(),
             "cause": cause,
             "cause_rejected": self.cause_rejected,
+            "baseline_unscorable": self.baseline_unscorable,
             "parameters": parameters,
             "causes": self.causes.iter().map(|c| json!({
                 "effect": c.effect.name(),

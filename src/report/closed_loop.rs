@@ -102,6 +102,14 @@ pub fn text(cl: &ClosedLoopFit) -> String {
     for s in &cl.stopped {
         let _ = writeln!(t, "  stopped: {s}");
     }
+    if cl.fits.is_empty() && !cl.stopped.is_empty() {
+        let _ = writeln!(
+            t,
+            "  warning: the identified model could not be simulated through any test, so \
+             nothing shows it follows the records; its parameters and sigmas describe the \
+             fit's last step, not a model to use"
+        );
+    }
     let _ = writeln!(
         t,
         "  (sigmas widened {:.1} times in variance for the residuals' correlation)",

@@ -49,7 +49,12 @@ pub(super) fn write_causes(html: &mut String, md: &mut String, d: &Diagnosis) {
         }
         html.push_str("</table>");
     }
-    let notes = d.mass_scale_text().into_iter().chain(d.visibility_text());
+    let notes = d
+        .baseline_unscorable
+        .iter()
+        .cloned()
+        .chain(d.mass_scale_text())
+        .chain(d.visibility_text());
     for why in d.not_testable.iter().cloned().chain(notes) {
         let _ = write!(html, "<p>{}.</p>", escape_html(&why));
         let _ = writeln!(md, "\n{why}.");

@@ -85,6 +85,9 @@ pub fn run(args: Args) -> anyhow::Result<()> {
     if let Some(r) = &d.cause_rejected {
         println!("note: {r}");
     }
+    if let Some(r) = &d.baseline_unscorable {
+        println!("note: {r}");
+    }
     println!(
         "diagnosis of {} ({:.1} s)",
         args.campaign.display(),

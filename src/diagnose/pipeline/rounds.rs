@@ -12,7 +12,7 @@ use crate::diagnose::locate::unexplained_cells;
 use crate::diagnose::missed::Missed;
 use crate::diagnose::output::{Candidate, Cause, Diagnosis, Partial};
 use crate::diagnose::part::Part;
-use crate::diagnose::residuals::{estimate_noise, Whitening};
+use crate::diagnose::residuals::{estimate_noise, simulate_test, Cells, Whitening};
 use crate::diagnose::visibility::specimen_visibility;
 use crate::diagnose::{unphysical, Progress};
 use crate::identify::spool::refine_servovalve;
@@ -59,12 +59,26 @@ pub(in crate::diagnose) fn diagnose_with(
     let mut section4 = id.params;
     section4.actuator.model = base.actuator.model;
     section4.servovalve = spool_valve;
-    let found = d.search_causes(Current {
+    let start = Current {
         params: base,
         section4,
         select: baseline_select.clone(),
         report: baseline_report.clone(),
-    });
+    };
+    let baseline_unscorable = unscorable(&base, c, &baseline_select.residual);
+    let found = match &baseline_unscorable {
+        // a candidate measured against a baseline with no score would claim an infinite
+        // gain (the UTFSM actuator's closed-loop fit, whose every run diverged at the
+        // diagnosis' sub-step, had stick-slip named with gain inf)
+        Some(_) => Found {
+            causes: Vec::new(),
+            partial: Vec::new(),
+            first_candidates: Vec::new(),
+            cause_rejected: None,
+            current: start,
+        },
+        None => d.search_causes(start),
+    };
     let current = found.current;
     let extended = current.params;
     let extended_heldout = d.report_missed.rms(&current.report.residual);
@@ -103,6 +117,7 @@ pub(in crate::diagnose) fn diagnose_with(
         not_testable,
         specimen_visibility,
         cause_rejected: found.cause_rejected,
+        baseline_unscorable,
         explained,
         gain: baseline_heldout / extended_heldout,
         extended_heldout,
@@ -116,6 +131,36 @@ pub(in crate::diagnose) fn diagnose_with(
         noise: d.noise,
         identification: id,
     }
+}
+
+/// Why no candidate can be measured against the baseline `base`, when none can: its
+/// selection quarter has no finite residual on any test (every run stopped). Names the
+/// first test's stop.
+fn unscorable(base: &Params, c: &Campaign, select: &[Cells]) -> Option<String> {
+    let scored = select
+        .iter()
+        .any(|cells| cells.values().any(|x| x.is_some_and(f64::is_finite)));
+    if scored {
+        return None;
+    }
+    let why = (0..c.records.len())
+        .find_map(|i| {
+            simulate_test(base, c, i, Part::Select)
+                .err()
+                .map(|e| (i, e))
+        })
+        .map(|(i, e)| {
+            format!(
+                "its run of {} stopped at t = {:.3} s: {}",
+                c.info.tests[i].name, e.time_s, e.reason
+            )
+        })
+        .unwrap_or_else(|| "no test has a recorded channel it can be compared on".into());
+    Some(format!(
+        "the refined baseline could not be scored on any test ({why}): no candidate can \
+         be measured against it, so no cause is named; check what `identify` gives for \
+         this campaign"
+    ))
 }
 
 impl<'a> Diagnoser<'a> {
