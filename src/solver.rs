@@ -156,6 +156,13 @@ pub struct Simulator {
 /// below what the default sub-step holds (6144 rad/s), so its runs are unchanged.
 pub const POLE_STEP: f64 = 2.0;
 
+/// Most sub-steps per interval the fastest pole may ask for (with [`POLE_STEP`], poles to
+/// 16 times the sampling rate in rad/s): a faster pole is beyond anything a record can
+/// show, and is an optimiser's wandering trial (an identification's trial valves at
+/// kilohertz made its runs 30 times slower and the UTFSM identification took minutes);
+/// its run may diverge, as it did before, and costs the fit one short run.
+pub const MAX_POLE_SUBSTEPS: f64 = 8.0;
+
 /// Modulus of the fastest pole of the closed loop linearised at rest (rad/s), 0 when it
 /// cannot be computed. The delay valve is taken as its first-order lag (the delay is
 /// not a state of the simulation).
@@ -315,7 +322,9 @@ impl Simulator {
         let friction_rate = 2.0 * v * self.model.friction.inv_yield;
         // free play: the rod ringing on its contact ([`Model::contact_rate_rad_s`])
         let contact = (dt_s * self.model.contact_rate_rad_s() / CONTACT_STEP_RAD).ceil();
-        let poles = (dt_s * self.fastest_pole_rad_s / POLE_STEP).ceil();
+        let poles = (dt_s * self.fastest_pole_rad_s / POLE_STEP)
+            .ceil()
+            .min(MAX_POLE_SUBSTEPS);
         let guard = (dt_s * friction_rate).ceil().max(contact).max(poles);
         // a non-finite guard (non-finite state) falls back to the base count
         let n = if guard.is_finite() {
