@@ -207,12 +207,17 @@ pub fn run(args: Args) -> anyhow::Result<()> {
         })
     };
     for m in shaketable::diagnose::medians_by_channel(&d.fits) {
+        // the ceiling needs a rest segment, which a lab's records may not have
+        let ceiling = m
+            .noise_ceiling
+            .map_or("no rest segment bounds it by the noise".to_string(), |c| {
+                format!("the noise at rest allows {}", median(Some(c)))
+            });
         println!(
-            "  fit of {} on the report quarters: baseline {}, extended {}; the noise at rest allows {}",
+            "  fit of {} on the report quarters: baseline {}, extended {}; {ceiling}",
             m.channel,
             median(m.baseline),
             median(m.extended),
-            median(m.noise_ceiling)
         );
     }
     if let Some(note) = d.structure_change() {
