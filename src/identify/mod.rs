@@ -202,7 +202,7 @@ pub fn identify_screened_with(s: &Screening, scope: Scope) -> Identification {
         None => Err(absent_role(
             s,
             "valve test (a random test recording the valve command and the spool)",
-            "servovalve not identified (defaults kept)",
+            "servovalve not identified by section 4 (see defaults for what the parameter file holds)",
         )),
     };
     let valve = valve.map_err(|e| note(Err(e))).ok();
@@ -259,7 +259,7 @@ pub fn identify_screened_with(s: &Screening, scope: Scope) -> Identification {
     let mass_kg = final_mass(mass_random.as_ref(), mass_periodic.as_ref());
     if mass_kg.is_none() {
         note(Err(IdentifyError::not_usable(
-            "no mass estimate: table.mass_kg is not identified (the parameter file keeps the default)",
+            "no mass estimate: table.mass_kg is not identified by section 4 (see defaults for what the parameter file holds)",
         )));
     }
     p.table.mass_kg = mass_kg.unwrap_or(p.table.mass_kg);
@@ -492,7 +492,8 @@ impl Identification {
         out
     }
 
-    /// The parameter-file keys that hold a default, not an identified value, and why.
+    /// The parameter-file keys that hold a default, not an identified value, and why (the
+    /// operating envelope always: no recording gives it).
     pub fn defaults(&self) -> Vec<(&'static str, &'static str)> {
         let mut d: Vec<(&'static str, &'static str)> = self
             .unknown_inputs
@@ -550,12 +551,38 @@ impl Identification {
             d.retain(|(k, _)| !fitted(k) && !held(k));
             d.extend(cl.conventions.iter().map(|c| (c.key, c.reason)));
         }
+        for (k, why) in d.iter_mut() {
+            if unused_by_valve(self.params.servovalve.model, k) {
+                *why = "not used by the chosen valve order (servovalve.model): written for a \
+                        switch of order, not a property of this table";
+            }
+        }
+        d.extend(LIMIT_KEYS.iter().map(|k| (*k, LIMITS_DEFAULT)));
         d
     }
 
     /// Oil-column figures of the identified parameters.
     pub fn oil_column_of_params(&self) -> OilColumn {
         OilColumn::of(&self.params)
+    }
+}
+
+/// The operating envelope's keys (spec section 8): campaign.toml has no key for them and
+/// no recording shows them, so the parameter file always holds the TREES Lab table's.
+const LIMIT_KEYS: [&str; 2] = ["limits.stroke_m", "limits.velocity_m_s"];
+
+/// Why [`LIMIT_KEYS`] are defaults.
+const LIMITS_DEFAULT: &str = "no recording shows the operating envelope: the TREES Lab \
+     table's stroke and velocity written; set this table's own before simulating near them";
+
+/// Whether servovalve key `key` is unused by a valve of order `model`.
+fn unused_by_valve(model: crate::params::ServovalveModel, key: &str) -> bool {
+    use crate::params::ServovalveModel::*;
+    match model {
+        SecondOrder => key == "servovalve.time_constant_s",
+        FirstOrder | Delay => {
+            key == "servovalve.natural_frequency_hz" || key == "servovalve.damping_ratio"
+        }
     }
 }
 
