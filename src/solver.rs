@@ -310,8 +310,9 @@ impl Simulator {
     }
 
     /// Number of sub-steps used for an interval of `dt_s`: at most `max_substep_s` each,
-    /// short enough for the fastest pole at rest ([`POLE_STEP`]), and for the Bouc-Wen equation (eq. 4.15), whose rate near `|Z| = 1` is
-    /// about `2 |v| / Y`: RK4 is stable for `h * rate < 2.78`; the guard keeps it below 1
+    /// short enough for the fastest pole at rest ([`POLE_STEP`], [`MAX_POLE_SUBSTEPS`]),
+    /// and for the Bouc-Wen equation (eq. 4.15), whose rate near `|Z| = 1` is about
+    /// `2 |v| / Y`: RK4 is stable for `h * rate < 2.78`; the guard keeps it below 1
     /// (it only acts for a small yield displacement or a fast table: with the defaults,
     /// Y = 1 mm, from 1.5 m/s at 1/3072 s).
     pub fn substeps(&self, dt_s: f64) -> usize {
