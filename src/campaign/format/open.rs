@@ -82,15 +82,16 @@ impl Toml {
     }
 
     /// The records of the tests whose rate comes from their time column, read only to
-    /// settle those rates ([`Self::settle_time_rates`]).
-    fn settle_unread_rates(&mut self, root: &Path, dir: &Path) -> Result<(), CampaignError> {
-        if !self.rates_from_time() {
-            return Ok(());
-        }
-        let real = self.locate(root, dir)?;
-        let mut rates = vec![None; real.len()];
+    /// settle those rates ([`Self::settle_time_rates`]); `rates` holds those already read
+    /// (`None` where not), which are not read again. `real`: the located files.
+    fn settle_unread_rates(
+        &mut self,
+        dir: &Path,
+        real: &[PathBuf],
+        mut rates: Vec<Option<f64>>,
+    ) -> Result<(), CampaignError> {
         for (i, real) in real.iter().enumerate() {
-            if self.plans[i].sample_rate_hz.is_none() {
+            if self.plans[i].sample_rate_hz.is_none() && rates[i].is_none() {
                 rates[i] = Some(self.read_test(dir, real, i)?.2);
             }
         }
@@ -114,7 +115,11 @@ impl Toml {
 pub fn read_campaign_info(dir: &Path) -> Result<CampaignInfo, CampaignError> {
     let root = campaign_root(dir)?;
     let mut toml = Toml::read(&root, dir)?;
-    toml.settle_unread_rates(&root, dir)?;
+    if toml.rates_from_time() {
+        let real = toml.locate(&root, dir)?;
+        let unread = vec![None; real.len()];
+        toml.settle_unread_rates(dir, &real, unread)?;
+    }
     Ok(toml.info)
 }
 
@@ -247,7 +252,9 @@ pub fn read_campaign_test(dir: &Path, name: &str) -> Result<(CampaignInfo, Recor
         });
     };
     let real = toml.locate(&root, dir)?;
-    let (record, _, _) = toml.read_test(dir, &real[i], i)?;
-    toml.settle_unread_rates(&root, dir)?;
+    let (record, _, fs) = toml.read_test(dir, &real[i], i)?;
+    let mut rates = vec![None; real.len()];
+    rates[i] = Some(fs);
+    toml.settle_unread_rates(dir, &real, rates)?;
     Ok((toml.info, record))
 }
