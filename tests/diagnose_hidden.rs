@@ -179,16 +179,19 @@ fn diagnose_synthesised(
     let o = Command::new(bin).args(&args).output().unwrap();
     assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
     let json = tmp.path().join("diagnosis.json");
-    let o = Command::new(bin)
-        .args([
-            "diagnose",
-            "--quiet",
-            dir.to_str().unwrap(),
-            "--json",
-            json.to_str().unwrap(),
-        ])
-        .output()
-        .unwrap();
+    let mut diagnose = Command::new(bin);
+    diagnose.args([
+        "diagnose",
+        "--quiet",
+        dir.to_str().unwrap(),
+        "--json",
+        json.to_str().unwrap(),
+    ]);
+    if std::env::var_os("SHAKETABLE_TRACE").is_some() {
+        // the diagnosis' trace shows with --nocapture while developing
+        diagnose.stderr(std::process::Stdio::inherit());
+    }
+    let o = diagnose.output().unwrap();
     assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
     dump(&json, &effect, seed);
     let v: serde_json::Value =

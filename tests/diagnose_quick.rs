@@ -110,7 +110,7 @@ fn quick_diagnosis_names_and_fits_a_specimen() {
         assert_eq!(acc.len(), 3, "{spec}: {}", v["fits"]);
         for (base, ext) in acc {
             assert!(
-                ext > base + FIT_GAIN_POINTS && ext > 90.0,
+                ext > base + FIT_GAIN_POINTS && ext > EXTENDED_FIT_PERCENT,
                 "{spec}: {}",
                 v["fits"]
             );

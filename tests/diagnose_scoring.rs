@@ -35,15 +35,7 @@ fn heldout(p: &Params, c: &shaketable::campaign::Campaign, measure: Measure) -> 
     let mut v = Vec::new();
     for i in 0..c.records.len() {
         let pred = predict(p, c, i, Part::Whole, &noise);
-        let cells = || {
-            scores(
-                &c.records[i],
-                &pred,
-                &noise,
-                Part::HeldOut,
-                c.info.sample_rate_hz,
-            )
-        };
+        let cells = || scores(c, i, &pred, &noise, Part::HeldOut);
         let row = match measure {
             Measure::SampleWise => ratios(&c.records[i], &pred.locked, &noise, Part::HeldOut),
             Measure::Score => cells().score,

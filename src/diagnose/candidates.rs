@@ -51,6 +51,7 @@ pub(super) fn heldout_scores(
     let rows = |k: usize| PartRows {
         score: cells.iter().map(|s| s[k].0.score).collect(),
         residual: cells.iter().map(|s| s[k].0.residual).collect(),
+        deviation: cells.iter().map(|s| s[k].0.deviation).collect(),
         left_envelope: cells.iter().map(|s| s[k].1).collect(),
     };
     (rows(0), rows(1))
@@ -340,7 +341,7 @@ pub(super) fn fit_candidate(
 }
 
 impl Candidate {
-    /// Its selection residual and score over the cells `select_mask` keeps (the cells the
+    /// Its selection residual, deviation and score over the cells `select_mask` keeps (the cells the
     /// model it extends misses), the score with a penalty of 1 % per parameter, and its
     /// report residual over the cells `report_mask` keeps (the baseline's missed ones).
     pub(super) fn summarise(
@@ -349,6 +350,7 @@ impl Candidate {
         report_mask: &dyn Fn(&[Cells]) -> f64,
     ) {
         self.select_residual = select_mask(&self.select.residual);
+        self.select_deviation = select_mask(&self.select.deviation);
         self.score = select_mask(&self.select.score) * (1.0 + 0.01 * self.parameters.len() as f64);
         self.report_residual = report_mask(&self.report.residual);
     }
@@ -386,6 +388,7 @@ pub(super) fn scored_candidate(
         parameters,
         sigma,
         select_residual: f64::NAN,
+        select_deviation: f64::NAN,
         score: f64::NAN,
         report_residual: f64::NAN,
         fit_residual: fitted.fit_residual,

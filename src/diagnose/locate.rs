@@ -79,7 +79,7 @@ fn locate(
 ) -> Option<UnexplainedCell> {
     let pred = predict(p, c, i, Part::Whole, noise);
     let r = &c.records[i];
-    let bands = channel_bands(r, &pred, noise, Part::Report, c.sample_rate_of(i), ch)?;
+    let bands = channel_bands(c, i, &pred, noise, Part::Report, ch)?;
     let worst = bands.iter().max_by(|a, b| a.ratio.total_cmp(&b.ratio));
     let (band_hz, band_residual) = match worst {
         Some(b) => ([b.band_hz.0, b.band_hz.1], b.ratio.sqrt()),

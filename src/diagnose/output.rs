@@ -20,6 +20,8 @@ pub struct PartRows {
     pub score: Vec<Cells>,
     /// The standardised residual ([`super::residuals::CellScores::residual`]).
     pub residual: Vec<Cells>,
+    /// The sample-wise residual ([`super::residuals::CellScores::deviation`]).
+    pub deviation: Vec<Cells>,
     /// Whether the model's noise-free run left the operating envelope (spec section 8)
     /// over the part where the measured table did not, per test.
     pub left_envelope: Vec<bool>,
@@ -36,6 +38,9 @@ pub struct Candidate {
     /// RMS standardised residual (in units of the spread the model predicts) on the
     /// selection quarter's cells the model it extends misses.
     pub select_residual: f64,
+    /// RMS sample-wise residual (the noise-free run's distance to the records, over the
+    /// noise floor) on the same cells: it credits no spread the model predicts.
+    pub select_deviation: f64,
     /// RMS predictive score on the same cells times a penalty of 1 % per parameter
     /// (lower is better): the ranking.
     pub score: f64,
@@ -69,6 +74,7 @@ impl Candidate {
             parameters: BTreeMap::new(),
             sigma: BTreeMap::new(),
             select_residual: f64::NAN,
+            select_deviation: f64::NAN,
             score: f64::NAN,
             report_residual: f64::NAN,
             fit_residual: f64::NAN,

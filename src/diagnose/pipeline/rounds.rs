@@ -1,7 +1,7 @@
 //! One diagnosis from end to end ([`diagnose_with`]): the baseline set up and refined,
 //! the searches for causes until none passes, and the result assembled.
 
-use super::{verdict, Current, Diagnoser, Verdict};
+use super::{verdict, Current, Diagnoser, Standing, Verdict};
 use super::{MAX_CAUSES, PROGRESS_SETUP, SEARCH_STEPS};
 use crate::campaign::{Campaign, Record};
 use crate::diagnose::baseline::{force_recorded, mass_is_scale};
@@ -231,6 +231,17 @@ impl<'a> Diagnoser<'a> {
             // a specimen of several modes is the specimen
             searched.retain(|&e| e.name() != best.effect.name());
             let current_score = missed.rms(&current.select.score);
+            if crate::diagnose::trace_enabled() {
+                eprintln!(
+                    "  search {}: {} sample-wise on missed select cells {:.3} -> {:.3}, standardised {:.3} -> {:.3}",
+                    round + 1,
+                    best.effect.name(),
+                    missed.rms(&current.select.deviation),
+                    missed.rms(&best.select.deviation),
+                    missed.rms(&current.select.residual),
+                    missed.rms(&best.select.residual),
+                );
+            }
             let chance = || {
                 let chance = self.chance_factor(&current, &missed);
                 if crate::diagnose::trace_enabled() {
@@ -241,7 +252,11 @@ impl<'a> Diagnoser<'a> {
                 }
                 chance
             };
-            match verdict(&best, current_score, chance, table_mass_kg) {
+            let standing = Standing {
+                score: current_score,
+                deviation: missed.rms(&current.select.deviation),
+            };
+            match verdict(&best, standing, chance, table_mass_kg) {
                 Verdict::Cause => {
                     let (cause, extended) =
                         self.accept(best, &current, &missed, round, &mut causes);
