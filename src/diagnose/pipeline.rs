@@ -511,14 +511,6 @@ fn best_candidate(candidates: &[Candidate], table_mass_kg: f64) -> Option<usize>
     evidence.or_else(|| (0..candidates.len()).min_by(by_score))
 }
 
-/// The model a candidate extends, on the selection quarter's cells it misses: its RMS
-/// predictive score and its RMS sample-wise residual ([`Candidate::select_deviation`]).
-#[derive(Debug, Clone, Copy)]
-struct Standing {
-    score: f64,
-    deviation: f64,
-}
-
 /// What one search concluded about its best candidate.
 enum Verdict {
     Cause,
@@ -528,27 +520,18 @@ enum Verdict {
     NoGain,
 }
 
-/// The verdict on `best` against the model it extends (`current`, on the selection
-/// quarter's missed cells): a cause when it divides that score by at least
-/// [`REQUIRED_GAIN`] times the factor `chance` moves it by (on data no fit has seen),
-/// brings its noise-free run closer to the records there, is physical and is evidence.
-///
-/// Why the noise-free run must come closer: the score credits a model with the spread it
-/// predicts, and a candidate that makes the loop chatter predicts a large one. On the
-/// UTFSM actuator, whose MR damper's viscous force no catalogue row holds, a stick-slip
-/// with a static ratio of 5.8 divided the standardised residual by 1.7 with its run no closer to the
-/// force (sample-wise 49.5 -> 49.8 noise RMS; report fit % 11.7 -> 6.0). A true
-/// stick-slip also reproduces the sticking at the reversals: its run came closer on
-/// every hidden draw (1.47 -> 1.35 and 1.91 -> 1.64), although the chatter's phase is
-/// its own. `chance` is measured only for a gain past [`REQUIRED_GAIN`]
+/// The verdict on `best` against the model it extends, scored `current_score` on the
+/// selection quarter's missed cells: a cause when it divides that score by at least
+/// [`REQUIRED_GAIN`] times the factor `chance` moves it by (on data no fit has seen), is
+/// physical and is evidence. `chance` is measured only for a gain past [`REQUIRED_GAIN`]
 /// (it can only raise the bar, and costs two runs of the campaign).
 fn verdict(
     best: &Candidate,
-    current: Standing,
+    current_score: f64,
     chance: impl FnOnce() -> f64,
     table_mass_kg: f64,
 ) -> Verdict {
-    let gain = current.score / best.score;
+    let gain = current_score / best.score;
     if !(gain >= REQUIRED_GAIN) {
         return Verdict::NoGain;
     }
@@ -558,15 +541,6 @@ fn verdict(
             "it divides the selection score by {gain:.3}, below {REQUIRED_GAIN} times the \
              factor {chance:.3} by which chance moves that score (the model it extends is \
              rough: a 0.1 % change of the table mass moves its score by that factor)"
-        ));
-    }
-    if !(best.select_deviation < current.deviation) {
-        return Verdict::Partial(format!(
-            "its noise-free run follows the records no closer than the model it extends \
-             (sample-wise residual {:.3} for {:.3} noise RMS on the selection cells that \
-             model misses): it credits the residual to the spread it predicts, not to \
-             motion it reproduces",
-            best.select_deviation, current.deviation
         ));
     }
     if let Some(why) = unphysical(best, table_mass_kg) {

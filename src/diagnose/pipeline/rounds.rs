@@ -1,7 +1,7 @@
 //! One diagnosis from end to end ([`diagnose_with`]): the baseline set up and refined,
 //! the searches for causes until none passes, and the result assembled.
 
-use super::{verdict, Current, Diagnoser, Standing, Verdict};
+use super::{verdict, Current, Diagnoser, Verdict};
 use super::{MAX_CAUSES, PROGRESS_SETUP, SEARCH_STEPS};
 use crate::campaign::{Campaign, Record};
 use crate::diagnose::baseline::{force_recorded, mass_is_scale};
@@ -252,11 +252,7 @@ impl<'a> Diagnoser<'a> {
                 }
                 chance
             };
-            let standing = Standing {
-                score: current_score,
-                deviation: missed.rms(&current.select.deviation),
-            };
-            match verdict(&best, standing, chance, table_mass_kg) {
+            match verdict(&best, current_score, chance, table_mass_kg) {
                 Verdict::Cause => {
                     let (cause, extended) =
                         self.accept(best, &current, &missed, round, &mut causes);
