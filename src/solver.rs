@@ -51,6 +51,18 @@ impl Rk4Stage {
 pub fn rk4_step<const N: usize>(
     x: &mut [f64; N],
     h_s: f64,
+    derivative: impl FnMut(Rk4Stage, &[f64; N], &mut [f64; N]),
+) {
+    rk4_step_leading::<N, N>(x, h_s, derivative)
+}
+
+/// [`rk4_step`] that advances only the leading `M` states: the caller guarantees that the
+/// derivative of every later state is exactly zero (a state of a switched-off part), so
+/// they keep their values, as the full step would keep them bit for bit.
+#[inline(always)]
+pub fn rk4_step_leading<const N: usize, const M: usize>(
+    x: &mut [f64; N],
+    h_s: f64,
     mut derivative: impl FnMut(Rk4Stage, &[f64; N], &mut [f64; N]),
 ) {
     let h = h_s;
@@ -58,21 +70,21 @@ pub fn rk4_step<const N: usize>(
     let mut k2 = [0.0; N];
     let mut k3 = [0.0; N];
     let mut k4 = [0.0; N];
-    let mut at = [0.0; N];
+    let mut at = *x;
     derivative(Rk4Stage::Start, x, &mut k1);
-    for j in 0..N {
+    for j in 0..M {
         at[j] = x[j] + 0.5 * h * k1[j];
     }
     derivative(Rk4Stage::Middle, &at, &mut k2);
-    for j in 0..N {
+    for j in 0..M {
         at[j] = x[j] + 0.5 * h * k2[j];
     }
     derivative(Rk4Stage::Middle, &at, &mut k3);
-    for j in 0..N {
+    for j in 0..M {
         at[j] = x[j] + h * k3[j];
     }
     derivative(Rk4Stage::End, &at, &mut k4);
-    for j in 0..N {
+    for j in 0..M {
         x[j] += h / 6.0 * (k1[j] + 2.0 * k2[j] + 2.0 * k3[j] + k4[j]);
     }
 }
@@ -358,19 +370,18 @@ impl Simulator {
                 self.delayed_command(t + 0.5 * h),
                 self.delayed_command(t + h),
             );
-            rk4_step(
-                &mut self.state,
-                h,
-                #[inline(always)]
-                |stage, x, dx| {
-                    let (inp, delayed) = match stage {
-                        Rk4Stage::Start => (&in0, d0),
-                        Rk4Stage::Middle => (&inm, dm),
-                        Rk4Stage::End => (&in1, d1),
-                    };
-                    model.derivatives(x, inp, noise, delayed, dx);
-                },
-            );
+            let stages = [(&in0, d0), (&inm, dm), (&in1, d1)];
+            if model.core_only() {
+                model_step::<{ crate::model::CORE_STATES }>(
+                    model,
+                    &mut self.state,
+                    h,
+                    stages,
+                    noise,
+                );
+            } else {
+                model_step::<NX>(model, &mut self.state, h, stages, noise);
+            }
             model.project(&mut self.state);
             self.time_s = if i + 1 == n { t0 + dt_s } else { t + h };
             if model.has_delay() {
@@ -386,6 +397,31 @@ impl Simulator {
             }
         }
     }
+}
+
+/// One RK4 sub-step of `model` advancing its leading `M` states ([`rk4_step_leading`]),
+/// with the inputs and delayed command at the step's start, midpoint and end.
+#[inline(always)]
+fn model_step<const M: usize>(
+    model: &Model,
+    state: &mut State,
+    h: f64,
+    stages: [(&Inputs, f64); 3],
+    noise: &SensorNoise,
+) {
+    rk4_step_leading::<NX, M>(
+        state,
+        h,
+        #[inline(always)]
+        |stage, x, dx| {
+            let (inp, delayed) = match stage {
+                Rk4Stage::Start => stages[0],
+                Rk4Stage::Middle => stages[1],
+                Rk4Stage::End => stages[2],
+            };
+            model.derivatives(x, inp, noise, delayed, dx);
+        },
+    );
 }
 
 /// A simulated record and, if the run had to stop, when and why.

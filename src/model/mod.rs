@@ -25,6 +25,8 @@ use servovalve::SpoolDynamics;
 
 /// Number of states.
 pub const NX: usize = 17;
+/// The states of the bare table: spool, pressures, table and friction.
+pub const CORE_STATES: usize = 7;
 /// The state vector.
 pub type State = [f64; NX];
 
@@ -154,6 +156,16 @@ impl Model {
             foundation: p.foundation.oscillator(),
             contact: p.free_play.contact(),
         }
+    }
+
+    /// True when every state after the first [`CORE_STATES`] has a zero derivative
+    /// (no specimen mode, free play or foundation).
+    #[inline]
+    pub fn core_only(&self) -> bool {
+        !self.specimen.enabled
+            && !self.specimen_modes.iter().any(|m| m.enabled)
+            && !self.contact.enabled
+            && !self.foundation.enabled
     }
 
     /// True when the spool is a pure delay of the command (needs the solver's history).
