@@ -6,6 +6,9 @@
 use crate::model::{Inputs, Model, Outputs, SensorNoise, State, NX};
 use std::collections::VecDeque;
 
+mod pair;
+pub use pair::simulate_run_pair;
+
 /// Default largest sub-step: 1/3072 s, i.e. 6 sub-steps per 512 Hz sample. Halving it
 /// changes the outputs of the paper's random tests by about 5e-7 of their RMS (RK4,
 /// error ~ h^4; tests/solver.rs asserts < 1e-6).
@@ -351,51 +354,104 @@ impl Simulator {
     /// Advance by `dt_s`: inputs go linearly from `from` (now) to `to` (now + dt),
     /// the noise is held. RK4 with [`Simulator::substeps`] equal sub-steps.
     pub fn advance(&mut self, dt_s: f64, from: &Inputs, to: &Inputs, noise: &SensorNoise) {
-        let n = self.substeps(dt_s);
-        let h = dt_s / n as f64;
-        let t0 = self.time_s;
+        let interval = self.interval(dt_s, from, to);
         if self.history.entries.is_empty() {
             self.record_command(from, noise);
         }
-        let model = &self.model;
-        for i in 0..n {
-            let t = t0 + i as f64 * h;
-            let w0 = (i as f64) / n as f64;
-            let wm = (i as f64 + 0.5) / n as f64;
-            let w1 = (i as f64 + 1.0) / n as f64;
-            // inputs and delayed command at the start, midpoint and end of the sub-step
-            let (in0, inm, in1) = (lerp(from, to, w0), lerp(from, to, wm), lerp(from, to, w1));
-            let (d0, dm, d1) = (
-                self.delayed_command(t),
-                self.delayed_command(t + 0.5 * h),
-                self.delayed_command(t + h),
-            );
-            let stages = [(&in0, d0), (&inm, dm), (&in1, d1)];
-            if model.core_only() {
-                model_step::<{ crate::model::CORE_STATES }>(
-                    model,
-                    &mut self.state,
-                    h,
-                    stages,
-                    noise,
-                );
-            } else {
-                model_step::<NX>(model, &mut self.state, h, stages, noise);
-            }
-            model.project(&mut self.state);
-            self.time_s = if i + 1 == n { t0 + dt_s } else { t + h };
-            if model.has_delay() {
-                let u = model
-                    .algebraic(
-                        &self.state,
-                        &in1,
-                        noise,
-                        self.history.at(self.time_s - model.valve.tau_s),
-                    )
-                    .valve_command;
-                self.history.push(self.time_s, u, model.valve.tau_s);
-            }
+        for i in 0..interval.n {
+            self.substep(&interval, i, noise);
         }
+    }
+
+    /// The next `dt_s` from now in [`Simulator::substeps`] equal sub-steps, the inputs
+    /// going from `from` to `to`.
+    #[inline(always)]
+    fn interval<'a>(&self, dt_s: f64, from: &'a Inputs, to: &'a Inputs) -> Interval<'a> {
+        let n = self.substeps(dt_s);
+        Interval {
+            t0_s: self.time_s,
+            dt_s,
+            n,
+            h_s: dt_s / n as f64,
+            from,
+            to,
+        }
+    }
+
+    /// Sub-step `i` of `interval`.
+    #[inline(always)]
+    fn substep(&mut self, interval: &Interval, i: usize, noise: &SensorNoise) {
+        let (t, h) = (interval.time_s(i), interval.h_s);
+        // inputs and delayed command at the start, midpoint and end of the sub-step
+        let [in0, inm, in1] = interval.inputs(i);
+        let (d0, dm, d1) = (
+            self.delayed_command(t),
+            self.delayed_command(t + 0.5 * h),
+            self.delayed_command(t + h),
+        );
+        let model = &self.model;
+        let stages = [(&in0, d0), (&inm, dm), (&in1, d1)];
+        if model.core_only() {
+            model_step::<{ crate::model::CORE_STATES }>(model, &mut self.state, h, stages, noise);
+        } else {
+            model_step::<NX>(model, &mut self.state, h, stages, noise);
+        }
+        model.project(&mut self.state);
+        self.time_s = interval.end_time_s(i);
+        if model.has_delay() {
+            let u = model
+                .algebraic(
+                    &self.state,
+                    &in1,
+                    noise,
+                    self.history.at(self.time_s - model.valve.tau_s),
+                )
+                .valve_command;
+            self.history.push(self.time_s, u, model.valve.tau_s);
+        }
+    }
+}
+
+/// One sample interval of [`Simulator::advance`]: `n` equal sub-steps of `h_s` from
+/// `t0_s`, the inputs going linearly from `from` to `to`.
+struct Interval<'a> {
+    t0_s: f64,
+    dt_s: f64,
+    n: usize,
+    h_s: f64,
+    from: &'a Inputs,
+    to: &'a Inputs,
+}
+
+impl Interval<'_> {
+    /// The start of sub-step `i`.
+    #[inline(always)]
+    fn time_s(&self, i: usize) -> f64 {
+        self.t0_s + i as f64 * self.h_s
+    }
+
+    /// The time after sub-step `i` (the interval's end exactly after the last).
+    #[inline(always)]
+    fn end_time_s(&self, i: usize) -> f64 {
+        if i + 1 == self.n {
+            self.t0_s + self.dt_s
+        } else {
+            self.time_s(i) + self.h_s
+        }
+    }
+
+    /// The inputs at the start, midpoint and end of sub-step `i`.
+    #[inline(always)]
+    fn inputs(&self, i: usize) -> [Inputs; 3] {
+        let n = self.n as f64;
+        let w0 = (i as f64) / n;
+        let wm = (i as f64 + 0.5) / n;
+        let w1 = (i as f64 + 1.0) / n;
+        [
+            lerp(self.from, self.to, w0),
+            lerp(self.from, self.to, wm),
+            lerp(self.from, self.to, w1),
+        ]
     }
 }
 
@@ -414,14 +470,20 @@ fn model_step<const M: usize>(
         h,
         #[inline(always)]
         |stage, x, dx| {
-            let (inp, delayed) = match stage {
-                Rk4Stage::Start => stages[0],
-                Rk4Stage::Middle => stages[1],
-                Rk4Stage::End => stages[2],
-            };
+            let (inp, delayed) = rk4_stage_inputs(&stages, stage);
             model.derivatives(x, inp, noise, delayed, dx);
         },
     );
+}
+
+/// What a stage of a sub-step reads from its start, midpoint and end values.
+#[inline(always)]
+fn rk4_stage_inputs<T: Copy>(at: &[T; 3], stage: Rk4Stage) -> T {
+    match stage {
+        Rk4Stage::Start => at[0],
+        Rk4Stage::Middle => at[1],
+        Rk4Stage::End => at[2],
+    }
 }
 
 /// A simulated record and, if the run had to stop, when and why.

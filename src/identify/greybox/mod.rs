@@ -32,7 +32,7 @@ use super::signals::{correlation_factor, MAX_CORRELATION_LAG};
 use crate::campaign::{Campaign, Measured};
 use crate::params::Params;
 use crate::solver::Checks;
-use compare::{simulate_prefix, simulated, COMPARED};
+use compare::{simulate_prefix, simulate_prefix_pair, simulated, COMPARED};
 use parameters::with_search;
 use rayon::prelude::*;
 use serde::Serialize;
@@ -356,14 +356,7 @@ fn residuals(p: &Params, c: &Campaign, targets: &[Target]) -> Option<Vec<f64>> {
     p.validate().ok()?;
     let mut tests: Vec<(usize, usize)> = targets.iter().map(|t| (t.test, t.samples)).collect();
     tests.dedup();
-    let runs: Vec<(usize, Vec<crate::model::Outputs>)> = tests
-        .par_iter()
-        .map(|&(i, n)| {
-            simulate_prefix(p, c, i, n, Checks::DivergenceOnly)
-                .ok()
-                .map(|o| (i, o))
-        })
-        .collect::<Option<_>>()?;
+    let runs = simulate_tests(p, c, tests)?;
     let mut r = Vec::new();
     for t in targets {
         let sim = &runs.iter().find(|(i, _)| *i == t.test)?.1;
@@ -375,6 +368,31 @@ fn residuals(p: &Params, c: &Campaign, targets: &[Target]) -> Option<Vec<f64>> {
         );
     }
     r.iter().all(|v| v.is_finite()).then_some(r)
+}
+
+/// The runs of `p` on `tests` (test, samples), two at a time ([`simulate_prefix_pair`],
+/// the longest together) and the pairs in parallel; `None` when a run stopped.
+fn simulate_tests(
+    p: &Params,
+    c: &Campaign,
+    mut tests: Vec<(usize, usize)>,
+) -> Option<Vec<(usize, Vec<crate::model::Outputs>)>> {
+    tests.sort_by(|a, b| b.1.cmp(&a.1));
+    let checks = Checks::DivergenceOnly;
+    let runs: Vec<Vec<(usize, Vec<crate::model::Outputs>)>> = tests
+        .par_chunks(2)
+        .map(|pair| match *pair {
+            [a, b] => {
+                let [ra, rb] = simulate_prefix_pair(p, c, [a, b], checks);
+                Some(vec![(a.0, ra.ok()?), (b.0, rb.ok()?)])
+            }
+            _ => pair
+                .iter()
+                .map(|&(i, n)| simulate_prefix(p, c, i, n, checks).ok().map(|o| (i, o)))
+                .collect(),
+        })
+        .collect::<Option<_>>()?;
+    Some(runs.into_iter().flatten().collect())
 }
 
 /// Why `p` cannot be simulated on `tests`: the parameter rule it breaks or the first run

@@ -1,0 +1,198 @@
+//! Two independent runs advanced together, sub-step by sub-step: a run is latency bound
+//! (each RK4 stage waits on the derivative chain of the one before: forces, acceleration,
+//! command, valve), so the processor overlaps a second run's independent chain almost for
+//! free. Each run computes exactly what it computes alone ([`Simulator::advance`], the
+//! same sub-step interval and arithmetic), so the outputs are the same bit for bit; only the
+//! bare table without a delay valve is paired ([`Simulator::pairable`]), anything else
+//! advances alone.
+
+use super::Rk4Stage;
+use super::{rk4_stage_inputs, Checks, Run, Simulator, Stop, DIVERGED, NX};
+use crate::model::{Inputs, Model, Outputs, SensorNoise, State, CORE_STATES};
+
+impl Simulator {
+    /// Whether [`advance_pair`] may advance this simulator: the bare table (the RK4 step
+    /// of its leading states) and no command history (no delay valve).
+    fn pairable(&self) -> bool {
+        self.model.core_only() && !self.model.has_delay()
+    }
+}
+
+/// Two RK4 steps of the leading `M` states, stage by stage interleaved: each as
+/// [`super::rk4_step_leading`] computes it.
+#[inline(always)]
+fn rk4_step_pair<const N: usize, const M: usize>(
+    (xa, ha): (&mut [f64; N], f64),
+    mut da: impl FnMut(Rk4Stage, &[f64; N], &mut [f64; N]),
+    (xb, hb): (&mut [f64; N], f64),
+    mut db: impl FnMut(Rk4Stage, &[f64; N], &mut [f64; N]),
+) {
+    let (mut k1a, mut k2a, mut k3a, mut k4a) = ([0.0; N], [0.0; N], [0.0; N], [0.0; N]);
+    let (mut k1b, mut k2b, mut k3b, mut k4b) = ([0.0; N], [0.0; N], [0.0; N], [0.0; N]);
+    let (mut ata, mut atb) = (*xa, *xb);
+    da(Rk4Stage::Start, xa, &mut k1a);
+    db(Rk4Stage::Start, xb, &mut k1b);
+    for j in 0..M {
+        ata[j] = xa[j] + 0.5 * ha * k1a[j];
+        atb[j] = xb[j] + 0.5 * hb * k1b[j];
+    }
+    da(Rk4Stage::Middle, &ata, &mut k2a);
+    db(Rk4Stage::Middle, &atb, &mut k2b);
+    for j in 0..M {
+        ata[j] = xa[j] + 0.5 * ha * k2a[j];
+        atb[j] = xb[j] + 0.5 * hb * k2b[j];
+    }
+    da(Rk4Stage::Middle, &ata, &mut k3a);
+    db(Rk4Stage::Middle, &atb, &mut k3b);
+    for j in 0..M {
+        ata[j] = xa[j] + ha * k3a[j];
+        atb[j] = xb[j] + hb * k3b[j];
+    }
+    da(Rk4Stage::End, &ata, &mut k4a);
+    db(Rk4Stage::End, &atb, &mut k4b);
+    for j in 0..M {
+        xa[j] += ha / 6.0 * (k1a[j] + 2.0 * k2a[j] + 2.0 * k3a[j] + k4a[j]);
+        xb[j] += hb / 6.0 * (k1b[j] + 2.0 * k2b[j] + 2.0 * k3b[j] + k4b[j]);
+    }
+}
+
+/// The derivative of `model` at the stage's inputs, noise-free and without delay.
+#[inline(always)]
+fn derivative<'a>(
+    model: &'a Model,
+    inputs: &'a [Inputs; 3],
+) -> impl FnMut(Rk4Stage, &State, &mut State) + 'a {
+    #[inline(always)]
+    move |stage, x, dx| {
+        let inp = rk4_stage_inputs(&[&inputs[0], &inputs[1], &inputs[2]], stage);
+        model.derivatives(x, inp, &SensorNoise::default(), 0.0, dx);
+    }
+}
+
+/// Advance two pairable simulators by `dt_s`, each from its own `from` to its own `to`
+/// inputs, noise-free: their common sub-steps together, the rest of either alone.
+fn advance_pair(
+    a: &mut Simulator,
+    b: &mut Simulator,
+    dt_s: f64,
+    (from_a, to_a): (&Inputs, &Inputs),
+    (from_b, to_b): (&Inputs, &Inputs),
+) {
+    let ia = a.interval(dt_s, from_a, to_a);
+    let ib = b.interval(dt_s, from_b, to_b);
+    let zero = SensorNoise::default();
+    for i in 0..ia.n.max(ib.n) {
+        match (i < ia.n, i < ib.n) {
+            (true, true) => {
+                let (sa, sb) = (ia.inputs(i), ib.inputs(i));
+                rk4_step_pair::<NX, CORE_STATES>(
+                    (&mut a.state, ia.h_s),
+                    derivative(&a.model, &sa),
+                    (&mut b.state, ib.h_s),
+                    derivative(&b.model, &sb),
+                );
+                a.model.project(&mut a.state);
+                b.model.project(&mut b.state);
+                a.time_s = ia.end_time_s(i);
+                b.time_s = ib.end_time_s(i);
+            }
+            (true, false) => a.substep(&ia, i, &zero),
+            (false, true) => b.substep(&ib, i, &zero),
+            (false, false) => {}
+        }
+    }
+}
+
+/// One run of a pair: its simulator, inputs, outputs so far and whether it stopped.
+struct Lane<'a> {
+    sim: Simulator,
+    inputs: &'a [Inputs],
+    out: Vec<Outputs>,
+    stop: Option<Stop>,
+}
+
+impl<'a> Lane<'a> {
+    fn new(model: &Model, inputs: &'a [Inputs], max_substep_s: f64, checks: Checks) -> Self {
+        let mut sim = Simulator::new(model.clone(), 0.0, max_substep_s);
+        sim.checks = checks;
+        Lane {
+            sim,
+            inputs,
+            out: Vec::with_capacity(inputs.len()),
+            stop: None,
+        }
+    }
+
+    /// Whether sample `k` is still to be read (the run has neither ended nor stopped).
+    fn reads(&self, k: usize) -> bool {
+        self.stop.is_none() && k < self.inputs.len()
+    }
+
+    /// Whether the run advances past sample `k`.
+    fn advances(&self, k: usize) -> bool {
+        self.stop.is_none() && k + 1 < self.inputs.len()
+    }
+
+    /// After the advance past sample `k`: exact sample time, and the stop when the run
+    /// diverged (every later sample NaN), as [`super::run_observed`] does.
+    fn settle(&mut self, k: usize, dt_s: f64) {
+        self.sim.time_s = (k + 1) as f64 * dt_s;
+        if let Some(reason) = self.sim.diverged() {
+            self.out.resize(self.inputs.len(), DIVERGED);
+            self.stop = Some(Stop {
+                time_s: self.sim.time_s,
+                reason,
+            });
+        }
+    }
+
+    fn run(self) -> Run {
+        Run {
+            outputs: self.out,
+            stop: self.stop,
+        }
+    }
+}
+
+/// Two noise-free runs at the same sampling rate, each as [`super::simulate_run_with`]
+/// gives it (bit for bit), advanced together where both are pairable.
+pub fn simulate_run_pair(
+    (model_a, inputs_a): (&Model, &[Inputs]),
+    (model_b, inputs_b): (&Model, &[Inputs]),
+    sample_rate_hz: f64,
+    max_substep_s: f64,
+    checks: Checks,
+) -> [Run; 2] {
+    let mut a = Lane::new(model_a, inputs_a, max_substep_s, checks);
+    let mut b = Lane::new(model_b, inputs_b, max_substep_s, checks);
+    let paired = a.sim.pairable() && b.sim.pairable();
+    let dt = 1.0 / sample_rate_hz;
+    let zero = SensorNoise::default();
+    for k in 0..inputs_a.len().max(inputs_b.len()) {
+        for lane in [&mut a, &mut b] {
+            if lane.reads(k) {
+                let o = lane.sim.outputs(&lane.inputs[k], &zero);
+                lane.out.push(o);
+            }
+        }
+        let (go_a, go_b) = (a.advances(k), b.advances(k));
+        if paired && go_a && go_b {
+            let step_a = (&inputs_a[k], &inputs_a[k + 1]);
+            let step_b = (&inputs_b[k], &inputs_b[k + 1]);
+            advance_pair(&mut a.sim, &mut b.sim, dt, step_a, step_b);
+        } else {
+            for (lane, go) in [(&mut a, go_a), (&mut b, go_b)] {
+                if go {
+                    lane.sim
+                        .advance(dt, &lane.inputs[k], &lane.inputs[k + 1], &zero);
+                }
+            }
+        }
+        for (lane, go) in [(&mut a, go_a), (&mut b, go_b)] {
+            if go {
+                lane.settle(k, dt);
+            }
+        }
+    }
+    [a.run(), b.run()]
+}
