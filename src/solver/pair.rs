@@ -196,3 +196,91 @@ pub fn simulate_run_pair(
     }
     [a.run(), b.run()]
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::model::Reference;
+    use crate::params::{Params, ServovalveModel};
+    use crate::solver::{simulate_run_with, DEFAULT_MAX_SUBSTEP_S};
+
+    /// `n` samples at `fs` of a sine sweep of amplitude `amp_m` from rest.
+    fn sweep(n: usize, fs: f64, amp_m: f64) -> Vec<Inputs> {
+        (0..n)
+            .map(|k| {
+                let t = k as f64 / fs;
+                let phase = 2.0 * std::f64::consts::PI * (0.5 + 1.5 * t) * t;
+                let w = 2.0 * std::f64::consts::PI * (0.5 + 3.0 * t);
+                Inputs {
+                    reference: Reference {
+                        displacement_m: amp_m * phase.sin(),
+                        velocity_m_s: amp_m * w * phase.cos(),
+                        acceleration_m_s2: -amp_m * w * w * phase.sin(),
+                    },
+                    external_force_n: 0.0,
+                }
+            })
+            .collect()
+    }
+
+    /// Every output of a run as bits (NaN after a stop compares equal).
+    fn bits(run: &Run) -> Vec<[u64; 8]> {
+        run.outputs
+            .iter()
+            .map(|o| {
+                [
+                    o.valve_command,
+                    o.spool_position,
+                    o.displacement_m,
+                    o.velocity_m_s,
+                    o.acceleration_m_s2,
+                    o.actuator_force_n,
+                    o.pressure_a_pa,
+                    o.pressure_b_pa,
+                ]
+                .map(f64::to_bits)
+            })
+            .collect()
+    }
+
+    /// Runs of different lengths, valves and gains, one that diverges and one that cannot
+    /// be paired (a delay valve): each the same bit for bit as alone.
+    #[test]
+    fn paired_runs_are_the_runs_alone_bit_for_bit() {
+        let fs = 512.0;
+        let first = Params::trees_lab();
+        let mut second = first;
+        second.servovalve.model = ServovalveModel::SecondOrder;
+        second.controller.kp *= 1.3;
+        // a valve pole far beyond what the sub-steps may resolve: RK4 blows up
+        let mut unstable = first;
+        unstable.servovalve.model = ServovalveModel::FirstOrder;
+        unstable.servovalve.time_constant_s = 1e-6;
+        let mut delay = first;
+        delay.servovalve.model = ServovalveModel::Delay;
+        let (long, short) = (sweep(3000, fs, 0.05), sweep(2000, fs, 0.08));
+        let checks = Checks::DivergenceOnly;
+        let alone = |p: &Params, u: &[Inputs]| {
+            simulate_run_with(&Model::new(p), u, fs, None, DEFAULT_MAX_SUBSTEP_S, checks)
+        };
+        for (pa, pb) in [(first, second), (unstable, second), (second, delay)] {
+            let (ma, mb) = (Model::new(&pa), Model::new(&pb));
+            let [ra, rb] = simulate_run_pair(
+                (&ma, &long),
+                (&mb, &short),
+                fs,
+                DEFAULT_MAX_SUBSTEP_S,
+                checks,
+            );
+            for (paired, p, u) in [(ra, &pa, &long), (rb, &pb, &short)] {
+                let single = alone(p, u);
+                assert_eq!(paired.stop, single.stop);
+                assert!(bits(&paired) == bits(&single), "{:?}", p.servovalve.model);
+            }
+        }
+        assert!(
+            alone(&unstable, &long).stop.is_some(),
+            "the unstable run stops"
+        );
+    }
+}
