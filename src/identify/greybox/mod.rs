@@ -377,7 +377,7 @@ fn simulate_tests(
     c: &Campaign,
     mut tests: Vec<(usize, usize)>,
 ) -> Option<Vec<(usize, Vec<crate::model::Outputs>)>> {
-    tests.sort_by(|a, b| b.1.cmp(&a.1));
+    tests.sort_by_key(|&(_, samples)| std::cmp::Reverse(samples));
     let checks = Checks::DivergenceOnly;
     let runs: Vec<Vec<(usize, Vec<crate::model::Outputs>)>> = tests
         .par_chunks(2)
