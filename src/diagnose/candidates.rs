@@ -341,9 +341,10 @@ pub(super) fn fit_candidate(
 }
 
 impl Candidate {
-    /// Its selection residual, deviation and score over the cells `select_mask` keeps (the cells the
-    /// model it extends misses), the score with a penalty of 1 % per parameter, and its
-    /// report residual over the cells `report_mask` keeps (the baseline's missed ones).
+    /// Its selection residual, deviation and score over the cells `select_mask` keeps (the
+    /// cells the model it extends misses), the score with a penalty of 1 % per parameter,
+    /// and its report residual over the cells `report_mask` keeps (the baseline's missed
+    /// ones).
     pub(super) fn summarise(
         &mut self,
         select_mask: &dyn Fn(&[Cells]) -> f64,
