@@ -242,6 +242,9 @@ impl<'a> Diagnoser<'a> {
                     missed.rms(&best.select.residual),
                 );
             }
+            if crate::diagnose::trace_enabled() {
+                self.trace_coherence(round, &current.params, &best, &missed);
+            }
             let chance = || {
                 let chance = self.chance_factor(&current, &missed);
                 if crate::diagnose::trace_enabled() {
@@ -335,5 +338,35 @@ impl<'a> Diagnoser<'a> {
             report: best.report,
         };
         (cause, extended)
+    }
+
+    /// The trace's figure of how much of the missed selection cells' residual is coherent
+    /// with the reference, under the current model and under `best`
+    /// ([`crate::diagnose::model_error::coherent_power`], in noise-floor units).
+    fn trace_coherence(&self, round: usize, current: &Params, best: &Candidate, missed: &Missed) {
+        use crate::diagnose::model_error::coherent_power;
+        let mut sums = [[0.0; 2]; 2];
+        for (k, &i) in self.tests.iter().enumerate() {
+            for (ch, &is_missed) in missed.cells[k].iter() {
+                let Some(s) = self.noise.of(ch).filter(|_| is_missed) else {
+                    continue;
+                };
+                for (m, p) in [current, &best.params].into_iter().enumerate() {
+                    if let Some((coherent, total)) = coherent_power(p, self.c, i, ch) {
+                        sums[m][0] += coherent / (s * s);
+                        sums[m][1] += total / (s * s);
+                    }
+                }
+            }
+        }
+        eprintln!(
+            "  search {}: {} coherent residual power {:.4e} -> {:.4e} of {:.4e} -> {:.4e}",
+            round + 1,
+            best.effect.name(),
+            sums[0][0],
+            sums[1][0],
+            sums[0][1],
+            sums[1][1]
+        );
     }
 }
