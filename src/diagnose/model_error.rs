@@ -312,25 +312,33 @@ pub fn residual_response(
     Ok(out)
 }
 
-/// The residual power of channel `ch` of test `i` under `p` (whole test) that is linearly
+/// The residual power of channel `ch` of test `i` under `p` over `part` that is linearly
 /// coherent with the test's input, and its whole power, summed over the Welch bins
 /// (0 Hz excluded): `(sum gamma^2 S_ee, sum S_ee)`. `None` where no estimate can be made.
 ///
 /// A development figure (the diagnosis' trace): a residual coherent with the reference is
 /// deterministic, and a model's predicted spread should not be credited with it; chatter
 /// and impacts chaotic in detail are not coherent.
-pub fn coherent_power(p: &Params, c: &Campaign, i: usize, ch: Channel) -> Option<(f64, f64)> {
+pub fn coherent_power(
+    p: &Params,
+    c: &Campaign,
+    i: usize,
+    ch: Channel,
+    part: Part,
+) -> Option<(f64, f64)> {
     let (spec, r) = (c.info.tests.get(i)?, c.records.get(i)?);
     let measured = ch.measured(r)?;
+    let range = part.range(r.len());
     let run = simulate_test(p, c, i, Part::Whole);
     run.as_ref().ok()?;
     let simulated = padded(&run);
-    let residual: Vec<f64> = measured
+    let residual: Vec<f64> = measured[range.clone()]
         .iter()
-        .zip(simulated.iter())
+        .zip(&simulated[range.clone()])
         .map(|(m, o)| m - ch.simulated(o))
         .collect();
     let (_, input) = reference(spec.control, r);
+    let input = &input[range];
     let fs = c.sample_rate_of(i);
     let welch = Welch::new(fs, welch_options(fs, input.len()).ok()?).ok()?;
     let est = welch.frf(input, &residual).ok()?;

@@ -1,7 +1,7 @@
 //! One diagnosis from end to end ([`diagnose_with`]): the baseline set up and refined,
 //! the searches for causes until none passes, and the result assembled.
 
-use super::{verdict, Current, Diagnoser, Verdict};
+use super::{spread_credited, verdict, CoherentSplit, Current, Diagnoser, Verdict};
 use super::{MAX_CAUSES, PROGRESS_SETUP, SEARCH_STEPS};
 use crate::campaign::{Campaign, Record};
 use crate::diagnose::baseline::{force_recorded, mass_is_scale};
@@ -242,9 +242,6 @@ impl<'a> Diagnoser<'a> {
                     missed.rms(&best.select.residual),
                 );
             }
-            if crate::diagnose::trace_enabled() {
-                self.trace_coherence(round, &current.params, &best, &missed);
-            }
             let chance = || {
                 let chance = self.chance_factor(&current, &missed);
                 if crate::diagnose::trace_enabled() {
@@ -257,6 +254,15 @@ impl<'a> Diagnoser<'a> {
             };
             match verdict(&best, current_score, chance, table_mass_kg) {
                 Verdict::Cause => {
+                    if let Some(why) = self.credited_to_spread(&current, &best, &missed, round) {
+                        partial.push(Partial {
+                            effect: best.effect,
+                            parameters: best.parameters.clone(),
+                            selection_gain: current_score / best.score,
+                            why_not_a_cause: why,
+                        });
+                        break;
+                    }
                     let (cause, extended) =
                         self.accept(best, &current, &missed, round, &mut causes);
                     causes.push(cause);
@@ -340,10 +346,11 @@ impl<'a> Diagnoser<'a> {
         (cause, extended)
     }
 
-    /// The trace's figure of how much of the missed selection cells' residual is coherent
-    /// with the reference, under the current model and under `best`
-    /// ([`crate::diagnose::model_error::coherent_power`], in noise-floor units).
-    fn trace_coherence(&self, round: usize, current: &Params, best: &Candidate, missed: &Missed) {
+    /// How much of the missed selection cells' residual is coherent with the reference
+    /// under `current` and under `best` ([`crate::diagnose::model_error::coherent_power`]
+    /// over the selection quarter, in noise-floor units); cells with no estimate (a test
+    /// too short for its averages) do not count.
+    fn coherence(&self, current: &Params, best: &Candidate, missed: &Missed) -> CoherentSplit {
         use crate::diagnose::model_error::coherent_power;
         let mut sums = [[0.0; 2]; 2];
         for (k, &i) in self.tests.iter().enumerate() {
@@ -351,22 +358,37 @@ impl<'a> Diagnoser<'a> {
                 let Some(s) = self.noise.of(ch).filter(|_| is_missed) else {
                     continue;
                 };
-                for (m, p) in [current, &best.params].into_iter().enumerate() {
-                    if let Some((coherent, total)) = coherent_power(p, self.c, i, ch) {
-                        sums[m][0] += coherent / (s * s);
-                        sums[m][1] += total / (s * s);
-                    }
+                let [Some(a), Some(b)] = [current, &best.params]
+                    .map(|p| coherent_power(p, self.c, i, ch, crate::diagnose::Part::Select))
+                else {
+                    continue;
+                };
+                for (m, (coherent, total)) in [a, b].into_iter().enumerate() {
+                    sums[m][0] += coherent / (s * s);
+                    sums[m][1] += total / (s * s);
                 }
             }
         }
-        eprintln!(
-            "  search {}: {} coherent residual power {:.4e} -> {:.4e} of {:.4e} -> {:.4e}",
-            round + 1,
-            best.effect.name(),
-            sums[0][0],
-            sums[1][0],
-            sums[0][1],
-            sums[1][1]
-        );
+        CoherentSplit {
+            current_coherent: sums[0][0],
+            current_total: sums[0][1],
+            candidate_coherent: sums[1][0],
+        }
+    }
+
+    /// Why `best` is credited with a residual its predicted spread cannot hold
+    /// ([`spread_credited`] on [`Diagnoser::coherence`]), if it is.
+    fn credited_to_spread(
+        &self,
+        current: &Current,
+        best: &Candidate,
+        missed: &Missed,
+        round: usize,
+    ) -> Option<String> {
+        let split = self.coherence(&current.params, best, missed);
+        if crate::diagnose::trace_enabled() {
+            eprintln!("  search {}: {} {split:?}", round + 1, best.effect.name());
+        }
+        spread_credited(&split)
     }
 }

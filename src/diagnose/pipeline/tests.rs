@@ -70,3 +70,23 @@ fn the_verdict_needs_gain_physics_and_evidence() {
         Verdict::Partial(_)
     ));
 }
+
+/// A mostly coherent residual (deterministic) must lose a tenth of its coherent power to
+/// the cause; a mostly incoherent one (chatter, impacts) may be credited to spread.
+#[test]
+fn a_deterministic_residual_is_not_credited_to_spread() {
+    let split = |coherent: f64, total: f64, after: f64| CoherentSplit {
+        current_coherent: coherent,
+        current_total: total,
+        candidate_coherent: after,
+    };
+    // the UTFSM damper's stick-slip: 97 % coherent, 1 % of it removed
+    let why = spread_credited(&split(2.89e4, 2.99e4, 2.865e4)).unwrap();
+    assert!(why.contains("97 %"), "{why}");
+    // a true deadband beside a specimen: 89 % coherent, 47 % removed
+    assert_eq!(spread_credited(&split(5.84e6, 6.60e6, 3.12e6)), None);
+    // a true stick-slip: 3 % coherent, whatever its run does to that part
+    assert_eq!(spread_credited(&split(3.3, 120.0, 3.3)), None);
+    // no estimate at all (every test too short): nothing is claimed against it
+    assert_eq!(spread_credited(&split(0.0, 0.0, 0.0)), None);
+}
