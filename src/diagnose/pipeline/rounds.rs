@@ -252,17 +252,16 @@ impl<'a> Diagnoser<'a> {
                 }
                 chance
             };
-            match verdict(&best, current_score, chance, table_mass_kg) {
+            // a cause by every other rule is still no cause when its gain is a spread
+            // credited with a deterministic residual (measured only then: two more runs)
+            let judged = match verdict(&best, current_score, chance, table_mass_kg) {
+                Verdict::Cause => self
+                    .credited_to_spread(&current, &best, &missed, round)
+                    .map_or(Verdict::Cause, Verdict::Partial),
+                other => other,
+            };
+            match judged {
                 Verdict::Cause => {
-                    if let Some(why) = self.credited_to_spread(&current, &best, &missed, round) {
-                        partial.push(Partial {
-                            effect: best.effect,
-                            parameters: best.parameters.clone(),
-                            selection_gain: current_score / best.score,
-                            why_not_a_cause: why,
-                        });
-                        break;
-                    }
                     let (cause, extended) =
                         self.accept(best, &current, &missed, round, &mut causes);
                     causes.push(cause);
