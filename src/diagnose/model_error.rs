@@ -14,7 +14,7 @@
 //! Analysis and Measurement Procedures*, 4th ed., Wiley 2010, section 9.2, Table 9.6);
 //! the normal approximation holds for `eps` below about 0.2 and widens honestly beyond.
 
-use super::residuals::{padded, simulate_test, Channel, FIT_MAX_HZ};
+use super::residuals::{padded, simulate_test, Channel, TestRun, FIT_MAX_HZ};
 use super::{Diagnosis, Part};
 use crate::campaign::{Campaign, Control, Record};
 use crate::identify::frf::{FrfError, Welch, WelchOptions};
@@ -312,26 +312,26 @@ pub fn residual_response(
     Ok(out)
 }
 
-/// The residual power of channel `ch` of test `i` under `p` over `part` that is linearly
+/// The residual power of channel `ch` of test `i` in `run` (a model's run of it, at least
+/// to the end of `part`) over `part` that is linearly
 /// coherent with the test's input, and its whole power, summed over the Welch bins
 /// (0 Hz excluded): `(sum gamma^2 S_ee, sum S_ee)`. `None` where no estimate can be made.
 ///
-/// A development figure (the diagnosis' trace): a residual coherent with the reference is
-/// deterministic, and a model's predicted spread should not be credited with it; chatter
-/// and impacts chaotic in detail are not coherent.
+/// A residual coherent with the reference is deterministic, and a model's predicted
+/// spread should not be credited with it; chatter and impacts chaotic in detail are not
+/// coherent (the selection rule `spread_credited`).
 pub fn coherent_power(
-    p: &Params,
     c: &Campaign,
     i: usize,
     ch: Channel,
     part: Part,
+    run: &TestRun,
 ) -> Option<(f64, f64)> {
     let (spec, r) = (c.info.tests.get(i)?, c.records.get(i)?);
     let measured = ch.measured(r)?;
     let range = part.range(r.len());
-    let run = simulate_test(p, c, i, Part::Whole);
     run.as_ref().ok()?;
-    let simulated = padded(&run);
+    let simulated = padded(run);
     let residual: Vec<f64> = measured[range.clone()]
         .iter()
         .zip(&simulated[range.clone()])

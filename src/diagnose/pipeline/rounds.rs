@@ -351,14 +351,21 @@ impl<'a> Diagnoser<'a> {
     /// too short for its averages) do not count.
     fn coherence(&self, current: &Params, best: &Candidate, missed: &Missed) -> CoherentSplit {
         use crate::diagnose::model_error::coherent_power;
+        use crate::diagnose::residuals::simulate_test;
+        use crate::diagnose::Part;
         let mut sums = [[0.0; 2]; 2];
         for (k, &i) in self.tests.iter().enumerate() {
+            if !missed.cells[k].values().any(|&m| m) {
+                continue;
+            }
+            // each model's run of the test once, for all its missed channels
+            let runs = [current, &best.params].map(|p| simulate_test(p, self.c, i, Part::Select));
             for (ch, &is_missed) in missed.cells[k].iter() {
                 let Some(s) = self.noise.of(ch).filter(|_| is_missed) else {
                     continue;
                 };
-                let [Some(a), Some(b)] = [current, &best.params]
-                    .map(|p| coherent_power(p, self.c, i, ch, crate::diagnose::Part::Select))
+                let [Some(a), Some(b)] = [&runs[0], &runs[1]]
+                    .map(|run| coherent_power(self.c, i, ch, Part::Select, run))
                 else {
                     continue;
                 };
