@@ -1,7 +1,8 @@
 //! Where the residual the final model leaves lies (issue 17 part 4): the report cells it
 //! still misses, worst first, each with the octave band that holds most of its residual
-//! and what the residual depends on (direction of motion, amplitude, load pressure). This
-//! is what an engineer needs to look for physics no catalogue row describes.
+//! and what the residual depends on (direction of motion, amplitude, speed, load
+//! pressure). This is what an engineer needs to look for physics no catalogue row
+//! describes.
 
 use super::output::{PartRows, UnexplainedCell};
 use super::part::Part;
@@ -30,6 +31,10 @@ pub struct Dependence {
     pub moving_positive: Split,
     /// While the displacement is beyond half its largest excursion against within it.
     pub large_displacement: Split,
+    /// While the speed is beyond half its largest value against within it: a residual
+    /// that grows with speed (a drag, a velocity-dependent friction or damper) shows here,
+    /// one that grows with excursion (a spring) in `large_displacement`.
+    pub fast_motion: Split,
     /// While the load pressure is beyond half its largest value against within it.
     pub high_load_pressure: Split,
 }
@@ -99,6 +104,7 @@ fn locate(
     let depends_on = Dependence {
         moving_positive: split(&residual_units, run, |o| o.velocity_m_s > 0.0),
         large_displacement: split_at_half(&residual_units, run, |o| o.displacement_m.abs()),
+        fast_motion: split_at_half(&residual_units, run, |o| o.velocity_m_s.abs()),
         high_load_pressure: split_at_half(&residual_units, run, |o| {
             (o.pressure_a_pa - o.pressure_b_pa).abs()
         }),

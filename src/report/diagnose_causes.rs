@@ -78,12 +78,12 @@ pub(super) fn write_causes(html: &mut String, md: &mut String, d: &Diagnosis) {
          the RMS residual while the condition holds / while it does not.</p>\
          <table><tr><th>test</th><th>channel</th><th>band (Hz)</th><th>residual</th>\
          <th>band residual</th><th>moving + / -</th><th>large / small displacement</th>\
-         <th>high / low load pressure</th></tr>",
+         <th>fast / slow</th><th>high / low load pressure</th></tr>",
     );
     md.push_str(
         "\n## What is left unexplained (report quarter, worst first)\n\n\
-         | test | channel | band (Hz) | residual | band residual | moving + / - | large / small displacement | high / low load pressure |\n\
-         |---|---|---|---|---|---|---|---|\n",
+         | test | channel | band (Hz) | residual | band residual | moving + / - | large / small displacement | fast / slow | high / low load pressure |\n\
+         |---|---|---|---|---|---|---|---|---|\n",
     );
     for u in &d.unexplained {
         let cells = [
@@ -94,6 +94,7 @@ pub(super) fn write_causes(html: &mut String, md: &mut String, d: &Diagnosis) {
             format!("{:.2}", u.band_residual),
             split_text(&u.depends_on.moving_positive),
             split_text(&u.depends_on.large_displacement),
+            split_text(&u.depends_on.fast_motion),
             split_text(&u.depends_on.high_load_pressure),
         ];
         html.push_str("<tr>");
