@@ -303,6 +303,53 @@ fn read_keys_are_checked() {
     }
 }
 
+/// The lab's export with a decimal comma (a European locale's spreadsheet or DAQ
+/// software: `1,25e-3` between `;`) reads back as the same campaign with `[read] decimal =
+/// ","`, `campaign init` finds the comma, and a comma that would also separate cells is
+/// refused by name.
+#[test]
+fn a_decimal_comma_export_reads_back_and_is_sniffed() {
+    let c = small_campaign();
+    let tmp = tempfile::tempdir().unwrap();
+    let dir = tmp.path().join("lab");
+    write_lab_campaign(&c, &dir);
+    for spec in &c.info.tests {
+        let path = dir.join(format!("{}.txt", spec.name));
+        let text = std::fs::read_to_string(&path).unwrap();
+        let (head, rows) = text.split_at(text.find("Sample Number;").unwrap());
+        std::fs::write(&path, format!("{head}{}", rows.replace('.', ","))).unwrap();
+    }
+    let toml = std::fs::read_to_string(dir.join("campaign.toml")).unwrap();
+    let with_comma = toml.replace("header_line = 7", "header_line = 7\ndecimal = \",\"");
+    std::fs::write(dir.join("campaign.toml"), &with_comma).unwrap();
+    let lab = read_campaign(&dir).unwrap();
+    for ((spec, a), b) in c.info.tests.iter().zip(&lab.records).zip(&c.records) {
+        for (x, y) in [
+            (&a.displacement_m, &b.displacement_m),
+            (&a.force_n, &b.force_n),
+            (&a.acceleration_m_s2, &b.acceleration_m_s2),
+        ] {
+            let (x, y) = (x.as_deref().unwrap(), y.as_deref().unwrap());
+            assert!(rel_rms(x, y) < 1e-12, "{}: {}", spec.name, rel_rms(x, y));
+        }
+    }
+    // without the key the comma is named as what it is not: a number
+    std::fs::write(dir.join("campaign.toml"), &toml).unwrap();
+    let e = read_campaign(&dir).unwrap_err().to_string();
+    assert!(e.contains("is not a number"), "{e}");
+    let both = with_comma.replace("delimiter = \";\"", "delimiter = \",\"");
+    std::fs::write(dir.join("campaign.toml"), both).unwrap();
+    let e = read_campaign(&dir).unwrap_err().to_string();
+    assert!(e.contains("could not be told"), "{e}");
+    std::fs::remove_file(dir.join("campaign.toml")).unwrap();
+    let o = shaketable(&["campaign", "init", dir.to_str().unwrap()]);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let v: toml::Table =
+        toml::from_str(&std::fs::read_to_string(dir.join("campaign.toml")).unwrap()).unwrap();
+    assert_eq!(v["read"]["delimiter"].as_str(), Some(";"));
+    assert_eq!(v["read"]["decimal"].as_str(), Some(","));
+}
+
 /// `campaign init` on a lab export describes every file (columns, sample values, the
 /// rate from the preamble) in a campaign.toml that is valid TOML, and never overwrites.
 #[test]

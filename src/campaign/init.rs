@@ -42,6 +42,26 @@ pub struct TextRead {
     pub delimiter: &'static str,
     /// 1-based line of the column names; 0: no header.
     pub header_line: usize,
+    /// The numbers' decimal separator, `.` or `,`.
+    pub decimal: &'static str,
+}
+
+impl TextRead {
+    /// The keys as a TOML inline table's body: `delimiter = ";", header_line = 1` and
+    /// `decimal = ","` when the numbers have a decimal comma.
+    fn keys(&self, separator: &str) -> String {
+        let mut keys = vec![
+            format!(
+                "delimiter = {}",
+                toml::Value::String(self.delimiter.to_string())
+            ),
+            format!("header_line = {}", self.header_line),
+        ];
+        if self.decimal == "," {
+            keys.push("decimal = \",\"".to_string());
+        }
+        keys.join(separator)
+    }
 }
 
 #[derive(Debug, Clone, PartialEq)]
@@ -64,48 +84,88 @@ pub struct Skipped {
     pub why: String,
 }
 
-const DELIMITERS: [(&str, Option<char>); 4] = [
-    (",", Some(',')),
-    (";", Some(';')),
-    ("\t", Some('\t')),
-    ("whitespace", None),
+/// How cells may be separated and what the numbers' decimal separator is: a decimal
+/// comma only where the comma does not separate cells. Of dialects that read a head
+/// equally well the last listed is taken: a decimal point over a decimal comma (a file
+/// without commas reads alike under both).
+const DIALECTS: [Dialect; 7] = [
+    Dialect::new(";", Some(';'), true),
+    Dialect::new("\t", Some('\t'), true),
+    Dialect::new("whitespace", None, true),
+    Dialect::new(",", Some(','), false),
+    Dialect::new(";", Some(';'), false),
+    Dialect::new("\t", Some('\t'), false),
+    Dialect::new("whitespace", None, false),
 ];
 
-fn split(line: &str, d: Option<char>) -> Vec<&str> {
-    match d {
-        Some(c) => line.split(c).map(str::trim).collect(),
-        None => line.split_whitespace().collect(),
+/// A delimiter (its `[read]` name and character; `None`: whitespace) and whether the
+/// numbers have a decimal comma.
+#[derive(Debug, Clone, Copy)]
+struct Dialect {
+    name: &'static str,
+    delimiter: Option<char>,
+    decimal_comma: bool,
+}
+
+impl Dialect {
+    const fn new(name: &'static str, delimiter: Option<char>, decimal_comma: bool) -> Self {
+        Dialect {
+            name,
+            delimiter,
+            decimal_comma,
+        }
     }
-}
 
-fn is_number(cell: &str) -> bool {
-    cell.trim().trim_matches('"').parse::<f64>().is_ok()
-}
+    fn split<'a>(&self, line: &'a str) -> Vec<&'a str> {
+        match self.delimiter {
+            Some(c) => line.split(c).map(str::trim).collect(),
+            None => line.split_whitespace().collect(),
+        }
+    }
 
-/// A line is a data row under `d` when it has more than one cell and most are numbers.
-fn numeric_row(line: &str, d: Option<char>) -> bool {
-    let cells = split(line, d);
-    let numbers = cells.iter().filter(|c| is_number(c)).count();
-    cells.len() > 1 && 2 * numbers > cells.len()
+    fn number(&self, cell: &str) -> Option<f64> {
+        let cell = cell.trim().trim_matches('"');
+        match self.decimal_comma {
+            true => cell.replace(',', ".").parse().ok(),
+            false => cell.parse().ok(),
+        }
+    }
+
+    fn is_number(&self, cell: &str) -> bool {
+        self.number(cell).is_some()
+    }
+
+    /// A line is a data row when it has more than one cell and most are numbers.
+    fn numeric_row(&self, line: &str) -> bool {
+        let cells = self.split(line);
+        let numbers = cells.iter().filter(|c| self.is_number(c)).count();
+        cells.len() > 1 && 2 * numbers > cells.len()
+    }
 }
 
 /// Sniff one text file's head.
 pub fn sniff_text(file: &str, text: &str) -> Option<Sniffed> {
     let lines: Vec<&str> = lines_any(text).take(SNIFF_ROWS * 4).collect();
-    // the delimiter whose data rows are the most numerous
-    let (delimiter, d) = DELIMITERS
-        .iter()
-        .copied()
-        .max_by_key(|(_, d)| lines.iter().filter(|l| numeric_row(l, *d)).count())?;
-    let first_data = lines.iter().position(|l| numeric_row(l, d))?;
-    let width = split(lines[first_data], d).len();
+    // the dialect whose data rows are the most numerous, then whose rows hold the most
+    // numbers ("0,5;1,2" is a row of two numbers, not of "0", "5;1" and "2")
+    let d = DIALECTS.iter().copied().max_by_key(|d| {
+        let rows = lines.iter().filter(|l| d.numeric_row(l));
+        let numbers: usize = rows
+            .clone()
+            .map(|l| d.split(l).iter().filter(|c| d.is_number(c)).count())
+            .sum();
+        (rows.count(), numbers)
+    })?;
+    let first_data = lines.iter().position(|l| d.numeric_row(l))?;
+    let width = d.split(lines[first_data]).len();
     // the header: the nearest non-blank line above the data with as many cells
     let header = (0..first_data)
         .rev()
         .find(|&i| !lines[i].trim().is_empty())
-        .filter(|&i| split(lines[i], d).len() >= width - 1 && !numeric_row(lines[i], d));
+        .filter(|&i| d.split(lines[i]).len() >= width - 1 && !d.numeric_row(lines[i]));
     let names: Vec<String> = match header {
-        Some(i) => split(lines[i], d)
+        Some(i) => d
+            .split(lines[i])
             .iter()
             .map(|c| c.trim_matches('"').to_string())
             .collect(),
@@ -114,7 +174,7 @@ pub fn sniff_text(file: &str, text: &str) -> Option<Sniffed> {
     let rows: Vec<Vec<&str>> = lines[first_data..]
         .iter()
         .filter(|l| !l.trim().is_empty())
-        .map(|l| split(l, d))
+        .map(|l| d.split(l))
         .collect();
     let columns = names
         .iter()
@@ -131,18 +191,22 @@ pub fn sniff_text(file: &str, text: &str) -> Option<Sniffed> {
                     .take(SAMPLE_VALUES)
                     .map(|c| c.to_string())
                     .collect(),
-                numeric: cells.iter().filter(|c| !c.is_empty()).all(|c| is_number(c)),
+                numeric: cells
+                    .iter()
+                    .filter(|c| !c.is_empty())
+                    .all(|c| d.is_number(c)),
                 note: String::new(),
             }
         })
         .collect();
     let sample_rate =
-        preamble_rate(&lines[..first_data]).or_else(|| time_column_rate(&names, &rows));
+        preamble_rate(&lines[..first_data]).or_else(|| time_column_rate(&names, &rows, d));
     Some(Sniffed {
         file: file.to_string(),
         read: Some(TextRead {
-            delimiter,
+            delimiter: d.name,
             header_line: header.map_or(0, |i| i + 1),
+            decimal: if d.decimal_comma { "," } else { "." },
         }),
         columns,
         sample_rate,
@@ -202,11 +266,11 @@ fn median_step_rate(t: &[f64]) -> Option<f64> {
 }
 
 /// The rate of a column named like time, from its median step (seconds assumed).
-fn time_column_rate(names: &[String], rows: &[Vec<&str>]) -> Option<(f64, String)> {
+fn time_column_rate(names: &[String], rows: &[Vec<&str>], d: Dialect) -> Option<(f64, String)> {
     let j = names.iter().position(|n| is_time_name(n))?;
     let t: Vec<f64> = rows
         .iter()
-        .filter_map(|r| r.get(j).and_then(|c| c.trim().parse::<f64>().ok()))
+        .filter_map(|r| r.get(j).and_then(|c| d.number(c)))
         .collect();
     Some((
         median_step_rate(&t)?,
@@ -296,12 +360,7 @@ pub fn skeleton(name: &str, found: &[Sniffed], skipped: &[Skipped]) -> String {
     s.push_str(GEOMETRY_AND_CONTROLLER);
     let common = most_common_read(found);
     if let Some(r) = common {
-        let _ = writeln!(
-            s,
-            "\n[read]\ndelimiter = {}\nheader_line = {}",
-            toml::Value::String(r.delimiter.to_string()),
-            r.header_line
-        );
+        let _ = writeln!(s, "\n[read]\n{}", r.keys("\n"));
     }
     s.push_str(COLUMNS_HELP);
     let campaign_rate = rate.as_ref().map(|(fs, _)| *fs);
@@ -371,12 +430,7 @@ fn test_entry(f: &Sniffed, common: Option<TextRead>, campaign_rate: Option<f64>)
         return s;
     };
     if Some(read) != common {
-        let _ = writeln!(
-            s,
-            "read = {{ delimiter = {}, header_line = {} }}",
-            toml::Value::String(read.delimiter.to_string()),
-            read.header_line
-        );
+        let _ = writeln!(s, "read = {{ {} }}", read.keys(", "));
     }
     let _ = writeln!(
         s,
@@ -427,6 +481,7 @@ mod tests {
         TextRead {
             delimiter,
             header_line,
+            decimal: ".",
         }
     }
 
@@ -465,6 +520,22 @@ mod tests {
         assert_eq!(s.read, Some(read(";", 1)));
         let (fs, _) = s.sample_rate.unwrap();
         assert!((fs - 500.0).abs() < 1e-9, "{fs}");
+    }
+
+    /// A decimal comma between `;` cells (a European locale's export) is found, and its
+    /// time column gives the rate; commas that separate cells stay the delimiter.
+    #[test]
+    fn a_decimal_comma_is_sniffed() {
+        let text = "Zeit;Soll;Ist\n0,000;1,5;2,25\n0,005;1,6;2,5\n0,010;1,7;2,75\n";
+        let s = sniff_text("run.csv", text).unwrap();
+        let mut expected = read(";", 1);
+        expected.decimal = ",";
+        assert_eq!(s.read, Some(expected));
+        let (fs, _) = s.sample_rate.unwrap();
+        assert!((fs - 200.0).abs() < 1e-9, "{fs}");
+        assert!(s.columns.iter().all(|c| c.numeric));
+        let s = sniff_text("run.csv", "t,x,y\n0,1,2\n1,3,4\n2,5,6\n").unwrap();
+        assert_eq!(s.read, Some(read(",", 1)));
     }
 
     #[test]

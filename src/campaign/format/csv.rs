@@ -42,9 +42,19 @@ fn cells<'a>(line: &'a str, opts: &ReadOptions) -> Vec<&'a str> {
     }
 }
 
-/// A cell as a finite number, or the message saying why not.
-fn cell_value(name: &str, c: &str) -> Result<f64, String> {
-    match c.parse::<f64>() {
+/// A cell as a finite number, or the message saying why not. With a decimal comma the
+/// cell is rewritten into `buffer` first (one buffer for the whole file: no allocation
+/// per cell).
+fn cell_value(name: &str, c: &str, decimal: Decimal, buffer: &mut String) -> Result<f64, String> {
+    let text = match decimal {
+        Decimal::Comma if c.contains(',') => {
+            buffer.clear();
+            buffer.extend(c.chars().map(|ch| if ch == ',' { '.' } else { ch }));
+            buffer.as_str()
+        }
+        _ => c,
+    };
+    match text.parse::<f64>() {
         Ok(v) if v.is_finite() => Ok(v),
         Ok(_) => Err(format!(
             "channel `{name}`: `{c}` is not finite (NaN or infinity)"
@@ -103,8 +113,18 @@ pub(super) fn parse_csv(
         header_line: 0,
         row_lines: Vec::new(),
     };
+    if opts.decimal == Decimal::Comma && opts.delimiter == Delimiter::Char(',') {
+        return Err(CampaignError::Invalid {
+            file: file.to_string(),
+            message: "[read] decimal = \",\" with delimiter = \",\": a number's comma could not \
+                      be told from the cells' separator; set the delimiter the file uses \
+                      (\";\" or \"\\t\")"
+                .to_string(),
+        });
+    }
     let mut have_names = false;
     let mut last_line = 0usize;
+    let mut buffer = String::new();
     // a UTF-8 byte-order mark (spreadsheet exports) is not part of the first channel name
     let text = text.strip_prefix('\u{feff}').unwrap_or(text);
     for (i, line) in lines_any(text).enumerate() {
@@ -137,7 +157,7 @@ pub(super) fn parse_csv(
         }
         let width = t.names.len();
         for (j, cell) in row.iter().enumerate().take(width) {
-            match cell_value(&t.names[j], unquote(cell)) {
+            match cell_value(&t.names[j], unquote(cell), opts.decimal, &mut buffer) {
                 Ok(v) => t.columns[j].push(v),
                 Err(m) if strict => return Err(err(line_no, m)),
                 Err(m) => {

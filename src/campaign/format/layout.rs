@@ -32,6 +32,17 @@ pub struct ReadOptions {
     pub header_line: Option<usize>,
     /// Lines starting with it (after blanks) are skipped; empty: no comment lines.
     pub comment: String,
+    /// The numbers' decimal separator: `.`, or `,` as spreadsheets and DAQ software
+    /// write them under many European locales (`0,125` with `;` between cells).
+    pub decimal: Decimal,
+}
+
+/// The decimal separator of a text record's numbers.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+pub enum Decimal {
+    #[default]
+    Point,
+    Comma,
 }
 
 impl Default for ReadOptions {
@@ -40,6 +51,7 @@ impl Default for ReadOptions {
             delimiter: Delimiter::Char(','),
             header_line: None,
             comment: "#".to_string(),
+            decimal: Decimal::Point,
         }
     }
 }
@@ -51,6 +63,7 @@ pub struct ReadOverride {
     pub delimiter: Option<Delimiter>,
     pub header_line: Option<usize>,
     pub comment: Option<String>,
+    pub decimal: Option<Decimal>,
 }
 
 impl ReadOptions {
@@ -60,6 +73,7 @@ impl ReadOptions {
             delimiter: o.delimiter.unwrap_or(self.delimiter),
             header_line: o.header_line.or(self.header_line),
             comment: o.comment.clone().unwrap_or_else(|| self.comment.clone()),
+            decimal: o.decimal.unwrap_or(self.decimal),
         }
     }
 }

@@ -226,7 +226,7 @@ mod write;
 use csv::*;
 
 use layout::merge_columns;
-pub use layout::{ColumnEntry, ColumnMap, Delimiter, ReadOptions, ReadOverride, ReadPlan};
+pub use layout::{ColumnEntry, ColumnMap, Decimal, Delimiter, ReadOptions, ReadOverride, ReadPlan};
 pub use open::{read_campaign, read_campaign_info, read_campaign_test};
 pub use toml_file::{parse_campaign_toml, parse_campaign_toml_planned};
 pub use write::*;

@@ -3,12 +3,12 @@
 //! "campaign.toml additions"). Unknown keys inside them are errors: a typo such as
 //! `scal = 0.01` would silently read volts as metres.
 
-use super::layout::{ColumnEntry, Delimiter, ReadOverride};
+use super::layout::{ColumnEntry, Decimal, Delimiter, ReadOverride};
 use super::toml_values::{as_number, type_name, Lines};
 use super::CampaignError;
 use std::collections::BTreeMap;
 
-const READ_KEYS: [&str; 3] = ["delimiter", "header_line", "comment"];
+const READ_KEYS: [&str; 4] = ["delimiter", "header_line", "comment", "decimal"];
 const COLUMN_KEYS: [&str; 3] = ["column", "scale", "offset"];
 /// A header below this line is not a header but a mistake (a data row number): real
 /// acquisition software writes at most a few dozen lines of preamble.
@@ -74,6 +74,17 @@ pub(super) fn read_options(
                 )))
             }
             ("comment", toml::Value::String(s)) => o.comment = Some(s.clone()),
+            ("decimal", toml::Value::String(s)) => {
+                o.decimal = Some(match s.as_str() {
+                    "." => Decimal::Point,
+                    "," => Decimal::Comma,
+                    _ => {
+                        return Err(at.err(&key, format!(
+                            "`{s}` is not a decimal separator: \".\" or \",\""
+                        )))
+                    }
+                })
+            }
             (k, other) if READ_KEYS.contains(&k) => {
                 return Err(at.err(&key, format!("expected a string, found {}", type_name(other))))
             }
