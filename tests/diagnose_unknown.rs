@@ -143,7 +143,8 @@ fn a_drag_on_the_table_is_unexplained_and_located_where_it_moves_fast() {
         random_duration_s: 30.0,
         ..Default::default()
     };
-    unknown_physics::synthesise_with_body("quadratic_damping", 1.0, &opts, &dir);
+    let table = shaketable::Params::trees_lab();
+    unknown_physics::synthesise_with_body(&table, "quadratic_damping", 1.0, &opts, &dir);
     let v = diagnose(&dir);
     assert_eq!(v["cause"], "none", "{v:#}");
     assert_eq!(v["explained"], false, "{v:#}");

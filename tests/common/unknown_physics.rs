@@ -170,11 +170,17 @@ pub fn body(law: &str, scale: f64) -> Box<dyn Body> {
     }
 }
 
-/// Synthesise the paper's program with `opts` on the TREES Lab table, each test with a
-/// fresh body of `law` at `scale` on it, and write it into `dir` (with the law's name in
-/// [`LAW_FILE`]; the truth file holds the table's parameters only).
-pub fn synthesise_with_body(law: &str, scale: f64, opts: &SynthOptions, dir: &Path) {
-    let params = Params::trees_lab();
+/// Synthesise the paper's program with `opts` on the table `params` (catalogue effects
+/// included), each test with a fresh body of `law` at `scale` on it, and write it into
+/// `dir` (with the law's name in [`LAW_FILE`]; the truth file holds `params` only).
+pub fn synthesise_with_body(
+    params: &Params,
+    law: &str,
+    scale: f64,
+    opts: &SynthOptions,
+    dir: &Path,
+) {
+    let params = *params;
     let program = selected_program(opts);
     let mut c = synthesise_program(&params, &program, opts, None).expect("synthesis");
     let fs = c.info.sample_rate_hz;
