@@ -178,6 +178,27 @@ pub const POLE_STEP: f64 = 2.0;
 /// its run may diverge, as it did before, and costs the fit one short run.
 pub const MAX_POLE_SUBSTEPS: f64 = 8.0;
 
+/// The fastest closed-loop pole (rad/s) the sub-steps integrate faithfully at
+/// `sample_rate_hz`: [`POLE_STEP`] per sub-step, at most [`MAX_POLE_SUBSTEPS`] sub-steps a
+/// sample. A faster pole runs at the edge of RK4's stability (2.785 on the real axis),
+/// where its mode is not damped at all: a fit may then exploit the integrator, not the
+/// data (the UTFSM closed-loop fit put an overdamped valve's fast pole at 2.785 of a
+/// sub-step to the third digit).
+pub fn pole_reach_rad_s(sample_rate_hz: f64) -> f64 {
+    POLE_STEP * MAX_POLE_SUBSTEPS * sample_rate_hz
+}
+
+/// Whether `model`'s fastest pole at rest is within [`pole_reach_rad_s`] of
+/// `sample_rate_hz`.
+pub fn within_pole_reach(model: &Model, sample_rate_hz: f64) -> bool {
+    within_pole_reach_of(model, pole_reach_rad_s(sample_rate_hz))
+}
+
+/// Whether `model`'s fastest pole at rest is at most `reach_rad_s`.
+pub fn within_pole_reach_of(model: &Model, reach_rad_s: f64) -> bool {
+    fastest_pole_rad_s(model) <= reach_rad_s
+}
+
 /// Modulus of the fastest pole of the closed loop linearised at rest (rad/s), 0 when it
 /// cannot be computed. The delay valve is taken as its first-order lag (the delay is
 /// not a state of the simulation).

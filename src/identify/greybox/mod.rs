@@ -198,9 +198,19 @@ fn valve_order(
         first_order_cost: fit.cost,
         second_order_cost: fit2.as_ref().map(|f| f.cost),
         effective_samples: n,
-        rule: "the second-order valve (natural frequency and damping free, one parameter more) is kept when the information criterion prefers it, N ln(cost_1 / cost_2) > ln N (N the effective residual samples: samples over their correlation length; cost the sum of squared NRMSEs over the estimation tests), and neither its frequency nor its damping sits on a bound of its range",
+        rule: "the second-order valve (natural frequency and damping free, one parameter more) is kept when the information criterion prefers it, N ln(cost_1 / cost_2) > ln N (N the effective residual samples: samples over their correlation length; cost the sum of squared NRMSEs over the estimation tests), and neither its frequency nor its damping sits on a bound of its range, nor its fastest pole within a tenth of the fastest the solver integrates at the record's rate (16 times the rate in rad/s)",
     };
-    let inside = |f: &LsqFit| !valve_at_bound(&with_search(&q2, &s2.free, &f.theta), &s2.free);
+    let slowest_rate = full
+        .iter()
+        .map(|t| c.sample_rate_of(t.test))
+        .fold(f64::INFINITY, f64::min);
+    let inside = |f: &LsqFit| {
+        !valve_at_bound(
+            &with_search(&q2, &s2.free, &f.theta),
+            &s2.free,
+            slowest_rate,
+        )
+    };
     match fit2 {
         Some(f2) if n > 1.0 && n * (fit.cost / f2.cost).ln() > n.ln() && inside(&f2) => {
             order.chosen = "second_order";
@@ -354,6 +364,15 @@ fn targets(c: &Campaign, tests: &[usize], s: &Structure, excerpt_s: Option<f64>)
 /// the envelope.
 fn residuals(p: &Params, c: &Campaign, targets: &[Target]) -> Option<Vec<f64>> {
     p.validate().ok()?;
+    // a model the sub-steps cannot integrate faithfully is no candidate (its fastest
+    // pole would be fitted to the integrator's edge of stability)
+    let slowest_rate = targets
+        .iter()
+        .map(|t| c.sample_rate_of(t.test))
+        .fold(f64::INFINITY, f64::min);
+    if !crate::solver::within_pole_reach(&crate::model::Model::new(p), slowest_rate) {
+        return None;
+    }
     let mut tests: Vec<(usize, usize)> = targets.iter().map(|t| (t.test, t.samples)).collect();
     tests.dedup();
     let runs = simulate_tests(p, c, tests)?;
@@ -442,14 +461,27 @@ fn run_lsq(
 
 /// Whether a fitted second-order valve sits on a bound of its search range: the range
 /// stopped the fit, not the data, and the valve is not an estimate of the table's.
-fn valve_at_bound(p: &Params, free: &[GreyParameter]) -> bool {
+/// The fastest pole of a fitted valve counts as pushed against the solver's reach
+/// ([`crate::solver::pole_reach_rad_s`]) beyond this share of it: the fit stops a few
+/// steps short of a limit it pushes against.
+const VALVE_REACH_SHARE: f64 = 0.9;
+
+/// Whether `p`'s valve sits on a bound: a frequency or damping on a bound of its search
+/// range, or a closed loop whose fastest pole presses on what the sub-steps integrate at
+/// the campaign's slowest rate `rate_hz` (an overdamped valve's fast pole the data cannot
+/// place).
+fn valve_at_bound(p: &Params, free: &[GreyParameter], rate_hz: f64) -> bool {
     use GreyParameter::*;
-    free.iter()
-        .filter(|g| matches!(g, ValveNaturalFrequency | ValveDamping))
-        .any(|g| {
-            let (v, [lo, hi]) = (g.get(p), g.bounds(p));
-            v <= lo * (1.0 + VALVE_BOUND_MARGIN) || v >= hi * (1.0 - VALVE_BOUND_MARGIN)
-        })
+    let reach = crate::solver::pole_reach_rad_s(rate_hz) * VALVE_REACH_SHARE;
+    let pressing = !crate::solver::within_pole_reach_of(&crate::model::Model::new(p), reach);
+    pressing
+        || free
+            .iter()
+            .filter(|g| matches!(g, ValveNaturalFrequency | ValveDamping))
+            .any(|g| {
+                let (v, [lo, hi]) = (g.get(p), g.bounds(p));
+                v <= lo * (1.0 + VALVE_BOUND_MARGIN) || v >= hi * (1.0 - VALVE_BOUND_MARGIN)
+            })
 }
 
 /// Relative distance from a bound within which a fitted valve parameter counts as on it:
