@@ -175,15 +175,16 @@ pub const POLE_STEP: f64 = 2.0;
 /// 16 times the sampling rate in rad/s): a faster pole is beyond anything a record can
 /// show, and is an optimiser's wandering trial (an identification's trial valves at
 /// kilohertz made its runs 30 times slower and the UTFSM identification took minutes);
-/// its run may diverge, as it did before, and costs the fit one short run.
+/// its run may diverge, as it did before, and costs the fit one short run. The grey-box
+/// fit refuses such trials outright ([`within_pole_reach`]).
 pub const MAX_POLE_SUBSTEPS: f64 = 8.0;
 
 /// The fastest closed-loop pole (rad/s) the sub-steps integrate faithfully at
 /// `sample_rate_hz`: [`POLE_STEP`] per sub-step, at most [`MAX_POLE_SUBSTEPS`] sub-steps a
-/// sample. A faster pole runs at the edge of RK4's stability (2.785 on the real axis),
-/// where its mode is not damped at all: a fit may then exploit the integrator, not the
-/// data (the UTFSM closed-loop fit put an overdamped valve's fast pole at 2.785 of a
-/// sub-step to the third digit).
+/// sample. A faster pole is integrated ever less damped, up to RK4's edge of stability
+/// (2.785 times a sub-step's rate on the real axis), where its mode is not damped at all:
+/// a fit may then exploit the integrator, not the data (the UTFSM closed-loop fit put an
+/// overdamped valve's fast pole at 2.785 times the sub-step's rate, to the third digit).
 pub fn pole_reach_rad_s(sample_rate_hz: f64) -> f64 {
     POLE_STEP * MAX_POLE_SUBSTEPS * sample_rate_hz
 }

@@ -200,17 +200,9 @@ fn valve_order(
         effective_samples: n,
         rule: "the second-order valve (natural frequency and damping free, one parameter more) is kept when the information criterion prefers it, N ln(cost_1 / cost_2) > ln N (N the effective residual samples: samples over their correlation length; cost the sum of squared NRMSEs over the estimation tests), and neither its frequency nor its damping sits on a bound of its range, nor its fastest pole within a tenth of the fastest the solver integrates at the record's rate (16 times the rate in rad/s)",
     };
-    let slowest_rate = full
-        .iter()
-        .map(|t| c.sample_rate_of(t.test))
-        .fold(f64::INFINITY, f64::min);
-    let inside = |f: &LsqFit| {
-        !valve_at_bound(
-            &with_search(&q2, &s2.free, &f.theta),
-            &s2.free,
-            slowest_rate,
-        )
-    };
+    let rate_hz = slowest_rate_hz(c, full);
+    let inside =
+        |f: &LsqFit| !valve_at_bound(&with_search(&q2, &s2.free, &f.theta), &s2.free, rate_hz);
     match fit2 {
         Some(f2) if n > 1.0 && n * (fit.cost / f2.cost).ln() > n.ln() && inside(&f2) => {
             order.chosen = "second_order";
@@ -364,13 +356,14 @@ fn targets(c: &Campaign, tests: &[usize], s: &Structure, excerpt_s: Option<f64>)
 /// the envelope.
 fn residuals(p: &Params, c: &Campaign, targets: &[Target]) -> Option<Vec<f64>> {
     p.validate().ok()?;
-    // a model the sub-steps cannot integrate faithfully is no candidate (its fastest
-    // pole would be fitted to the integrator's edge of stability)
-    let slowest_rate = targets
-        .iter()
-        .map(|t| c.sample_rate_of(t.test))
-        .fold(f64::INFINITY, f64::min);
-    if !crate::solver::within_pole_reach(&crate::model::Model::new(p), slowest_rate) {
+    // a second-order valve the sub-steps cannot integrate faithfully is no candidate: its
+    // damping frees a fast pole the data cannot place, which the fit would put at the
+    // integrator's edge of stability (a first-order valve's one pole is what the data
+    // ask for; one they want faster than any sub-step ends at that edge too, a known
+    // limit)
+    let second_order = p.servovalve.model == crate::params::ServovalveModel::SecondOrder;
+    let rate_hz = slowest_rate_hz(c, targets);
+    if second_order && !crate::solver::within_pole_reach(&crate::model::Model::new(p), rate_hz) {
         return None;
     }
     let mut tests: Vec<(usize, usize)> = targets.iter().map(|t| (t.test, t.samples)).collect();
@@ -387,6 +380,14 @@ fn residuals(p: &Params, c: &Campaign, targets: &[Target]) -> Option<Vec<f64>> {
         );
     }
     r.iter().all(|v| v.is_finite()).then_some(r)
+}
+
+/// The slowest sample rate of the tests `targets` compare.
+fn slowest_rate_hz(c: &Campaign, targets: &[Target]) -> f64 {
+    targets
+        .iter()
+        .map(|t| c.sample_rate_of(t.test))
+        .fold(f64::INFINITY, f64::min)
 }
 
 /// The runs of `p` on `tests` (test, samples), two at a time ([`simulate_prefix_pair`],
@@ -459,17 +460,16 @@ fn run_lsq(
     )
 }
 
-/// Whether a fitted second-order valve sits on a bound of its search range: the range
-/// stopped the fit, not the data, and the valve is not an estimate of the table's.
 /// The fastest pole of a fitted valve counts as pushed against the solver's reach
 /// ([`crate::solver::pole_reach_rad_s`]) beyond this share of it: the fit stops a few
 /// steps short of a limit it pushes against.
 const VALVE_REACH_SHARE: f64 = 0.9;
 
-/// Whether `p`'s valve sits on a bound: a frequency or damping on a bound of its search
-/// range, or a closed loop whose fastest pole presses on what the sub-steps integrate at
-/// the campaign's slowest rate `rate_hz` (an overdamped valve's fast pole the data cannot
-/// place).
+/// Whether `p`'s fitted second-order valve sits on a bound, so that the range stopped the
+/// fit, not the data, and the valve is not an estimate of the table's: a frequency or
+/// damping on a bound of its search range, or a closed loop whose fastest pole presses on
+/// what the sub-steps integrate at the slowest rate `rate_hz` of the fitted tests (an
+/// overdamped valve's fast pole, which the data cannot place).
 fn valve_at_bound(p: &Params, free: &[GreyParameter], rate_hz: f64) -> bool {
     use GreyParameter::*;
     let reach = crate::solver::pole_reach_rad_s(rate_hz) * VALVE_REACH_SHARE;
