@@ -39,7 +39,8 @@ pub struct LsqFit {
     pub cost: f64,
     pub residuals: usize,
     /// One-sigma uncertainty of each parameter from `s^2 (J^T J)^-1`; when that is
-    /// singular, infinite for a parameter the data cannot fix ([`singular_sigma`]).
+    /// singular, infinite for a parameter the data cannot fix
+    /// ([`ScaledNormal::singular_sigma`]).
     pub sigma: Vec<f64>,
     /// `s^2 (J^T J)^-1`, `None` when singular.
     pub covariance: Option<DMatrix<f64>>,
@@ -201,67 +202,71 @@ const EIGEN_ITERATION_LIMIT: usize = 1000;
 /// A parameter whose squared share of a null direction exceeds this is not identified.
 const NULL_SHARE: f64 = 1e-6;
 
-/// One-sigma uncertainties from a singular `J^T J` (scaled by `s2`): infinite for a
-/// parameter whose column is zero or that takes part in a null direction (the data cannot
-/// fix it), and from the pseudo-inverse for the others, whose estimates the null
-/// directions do not touch (a flow limit that never binds leaves the other parameters'
-/// uncertainties defined).
-fn singular_sigma(jtj: DMatrix<f64>, s2: f64) -> Vec<f64> {
-    let n = jtj.nrows();
-    let live: Vec<usize> = (0..n).filter(|&i| jtj[(i, i)] > 0.0).collect();
-    let d: Vec<f64> = live.iter().map(|&i| jtj[(i, i)].sqrt()).collect();
-    let m = live.len();
-    let scaled = DMatrix::from_fn(m, m, |a, b| jtj[(live[a], live[b])] / (d[a] * d[b]));
-    // nalgebra's `SymmetricEigen::new` iterates without limit and never returns on a
-    // non-finite matrix: such a fit's uncertainty is unknown, so infinite
-    let eig = match scaled.iter().all(|x| x.is_finite()) {
-        true => nalgebra::SymmetricEigen::try_new(scaled, f64::EPSILON, EIGEN_ITERATION_LIMIT),
-        false => None,
-    };
-    let Some(eig) = eig else {
-        return vec![f64::INFINITY; n];
-    };
-    let null = |j: usize| !(eig.eigenvalues[j] > NULL_EIGENVALUE);
-    let mut sigma = vec![f64::INFINITY; n];
-    for (a, &i) in live.iter().enumerate() {
-        let v = |j: usize| eig.eigenvectors[(a, j)].powi(2);
-        if (0..m).filter(|&j| null(j)).map(v).sum::<f64>() > NULL_SHARE {
-            continue;
-        }
-        let var: f64 = (0..m)
-            .filter(|&j| !null(j))
-            .map(|j| v(j) / eig.eigenvalues[j])
-            .sum();
-        sigma[i] = (s2 * var).sqrt() / d[a];
-    }
-    sigma
+/// `J^T J` scaled to a unit diagonal over its live columns (those with a positive
+/// diagonal; units do not count), and its eigen-decomposition: what both the covariance
+/// and the singular sigmas read. `None` when the scaled matrix is not finite (nalgebra's
+/// `SymmetricEigen::new` would never return on it) or the decomposition does not converge.
+struct ScaledNormal {
+    live: Vec<usize>,
+    d: Vec<f64>,
+    eig: nalgebra::SymmetricEigen<f64, nalgebra::Dyn>,
 }
 
-/// The covariance `s2 (J^T J)^-1`, inverted through the eigen-decomposition of the scaled
-/// `J^T J` (unit diagonal); `None` when a direction is null (an eigenvalue at most
-/// [`NULL_EIGENVALUE`]: the data do not fix it) or the matrix is not finite. A plain
-/// inverse of a nearly singular matrix returns rounding noise without failing: an
-/// overdamped second-order valve, whose frequency and damping the motion fixes only
-/// through its slow pole, came out with a sigma of 6e-5 Hz on 256 Hz.
-fn covariance(jtj: &DMatrix<f64>, s2: f64) -> Option<DMatrix<f64>> {
-    let n = jtj.nrows();
-    if (0..n).any(|i| !(jtj[(i, i)] > 0.0)) {
-        return None;
+impl ScaledNormal {
+    fn of(jtj: &DMatrix<f64>) -> Option<Self> {
+        let n = jtj.nrows();
+        let live: Vec<usize> = (0..n).filter(|&i| jtj[(i, i)] > 0.0).collect();
+        let d: Vec<f64> = live.iter().map(|&i| jtj[(i, i)].sqrt()).collect();
+        let m = live.len();
+        let scaled = DMatrix::from_fn(m, m, |a, b| jtj[(live[a], live[b])] / (d[a] * d[b]));
+        if !scaled.iter().all(|x| x.is_finite()) {
+            return None;
+        }
+        let eig = nalgebra::SymmetricEigen::try_new(scaled, f64::EPSILON, EIGEN_ITERATION_LIMIT)?;
+        Some(ScaledNormal { live, d, eig })
     }
-    let d: Vec<f64> = (0..n).map(|i| jtj[(i, i)].sqrt()).collect();
-    let scaled = DMatrix::from_fn(n, n, |a, b| jtj[(a, b)] / (d[a] * d[b]));
-    if !scaled.iter().all(|x| x.is_finite()) {
-        return None;
+
+    fn null(&self, j: usize) -> bool {
+        !(self.eig.eigenvalues[j] > NULL_EIGENVALUE)
     }
-    let eig = nalgebra::SymmetricEigen::try_new(scaled, f64::EPSILON, EIGEN_ITERATION_LIMIT)?;
-    if eig.eigenvalues.iter().any(|&l| !(l > NULL_EIGENVALUE)) {
-        return None;
+
+    /// The covariance `s2 (J^T J)^-1` of `n` parameters through the eigen-decomposition;
+    /// `None` when a column is dead or a direction is null (the data do not fix it). A
+    /// plain inverse of a nearly singular matrix returns rounding noise without failing.
+    fn covariance(&self, n: usize, s2: f64) -> Option<DMatrix<f64>> {
+        let m = self.live.len();
+        if m < n || (0..m).any(|j| self.null(j)) {
+            return None;
+        }
+        let inverse_eigenvalues = DMatrix::from_diagonal(&self.eig.eigenvalues.map(|l| 1.0 / l));
+        let inv = &self.eig.eigenvectors * inverse_eigenvalues * self.eig.eigenvectors.transpose();
+        let d = &self.d;
+        Some(DMatrix::from_fn(n, n, |a, b| {
+            s2 * inv[(a, b)] / (d[a] * d[b])
+        }))
     }
-    let inverse_eigenvalues = DMatrix::from_diagonal(&eig.eigenvalues.map(|l| 1.0 / l));
-    let inv = &eig.eigenvectors * inverse_eigenvalues * eig.eigenvectors.transpose();
-    Some(DMatrix::from_fn(n, n, |a, b| {
-        s2 * inv[(a, b)] / (d[a] * d[b])
-    }))
+
+    /// One-sigma uncertainties of `n` parameters from a singular `J^T J` (scaled by
+    /// `s2`): infinite for a parameter whose column is zero or that takes part in a null
+    /// direction (the data cannot fix it), and from the pseudo-inverse for the others,
+    /// whose estimates the null directions do not touch (a flow limit that never binds
+    /// leaves the other parameters' uncertainties defined).
+    fn singular_sigma(&self, n: usize, s2: f64) -> Vec<f64> {
+        let m = self.live.len();
+        let mut sigma = vec![f64::INFINITY; n];
+        for (a, &i) in self.live.iter().enumerate() {
+            let v = |j: usize| self.eig.eigenvectors[(a, j)].powi(2);
+            if (0..m).filter(|&j| self.null(j)).map(v).sum::<f64>() > NULL_SHARE {
+                continue;
+            }
+            let var: f64 = (0..m)
+                .filter(|&j| !self.null(j))
+                .map(|j| v(j) / self.eig.eigenvalues[j])
+                .sum();
+            sigma[i] = (s2 * var).sqrt() / self.d[a];
+        }
+        sigma
+    }
 }
 
 fn finish(theta: Vec<f64>, cost: f64, m: usize, jm: &DMatrix<f64>, iterations: usize) -> LsqFit {
@@ -269,10 +274,13 @@ fn finish(theta: Vec<f64>, cost: f64, m: usize, jm: &DMatrix<f64>, iterations: u
     let dof = (m as f64 - n as f64).max(1.0);
     let s2 = cost / dof;
     let jtj = jm.transpose() * jm;
-    let covariance = covariance(&jtj, s2);
-    let sigma = match &covariance {
-        Some(cov) => (0..n).map(|i| cov[(i, i)].max(0.0).sqrt()).collect(),
-        None => singular_sigma(jtj, s2),
+    // one decomposition serves the covariance and, when it has none, the sigmas
+    let scaled = ScaledNormal::of(&jtj);
+    let covariance = scaled.as_ref().and_then(|s| s.covariance(n, s2));
+    let sigma = match (&covariance, &scaled) {
+        (Some(cov), _) => (0..n).map(|i| cov[(i, i)].max(0.0).sqrt()).collect(),
+        (None, Some(s)) => s.singular_sigma(n, s2),
+        (None, None) => vec![f64::INFINITY; n],
     };
     LsqFit {
         theta,
@@ -310,6 +318,13 @@ pub fn linear(a: &DMatrix<f64>, b: &DVector<f64>) -> Option<(DVector<f64>, Vec<f
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// [`ScaledNormal::singular_sigma`] of `jtj`, infinite everywhere when it cannot be
+    /// decomposed (such a fit's uncertainty is unknown).
+    fn singular_sigma(jtj: DMatrix<f64>, s2: f64) -> Vec<f64> {
+        let n = jtj.nrows();
+        ScaledNormal::of(&jtj).map_or(vec![f64::INFINITY; n], |s| s.singular_sigma(n, s2))
+    }
 
     /// A singular `J^T J` with a non-finite entry (an infinite diagonal divides to NaN)
     /// gives infinite sigmas at once rather than an endless eigen-iteration.
