@@ -24,6 +24,7 @@ fn elcentro(pga_g: f64) -> Target {
         step_s: Some(0.01),
         unit: Some(AccelerationUnit::StandardGravity),
         column: None,
+        decimal_comma: false,
     };
     let m = read_motion(std::path::Path::new(ELCENTRO), &read).unwrap();
     let opts = PrepareOptions {

@@ -271,7 +271,11 @@ pub(super) fn rest_at_ends(d: &mut [f64], pad: usize) {
 /// A cosine taper over the first and last [`END_TAPER_S`] (at most 5 % of the record).
 fn taper_ends(a: &mut [f64], rate_hz: f64) {
     let n = a.len();
-    let m = ((END_TAPER_S * rate_hz) as usize).min(n / 20).max(1);
+    // rounded, not truncated: a rate read off a time column (99.99999999999999 Hz for
+    // times printed to 0.01 s) must give the taper of its rate, not one sample less
+    let m = ((END_TAPER_S * rate_hz).round() as usize)
+        .min(n / 20)
+        .max(1);
     for k in 0..m {
         let w = 0.5 * (1.0 - (PI * k as f64 / m as f64).cos());
         a[k] *= w;

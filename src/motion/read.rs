@@ -73,6 +73,47 @@ pub struct ReadOptions {
     pub unit: Option<AccelerationUnit>,
     /// The acceleration column: a header name, or a 1-based number.
     pub column: Option<String>,
+    /// The file writes decimal commas (`0,0125`). Found without being told where a line
+    /// has several cells ([`Separator::of`]); a file of one column of such numbers
+    /// reads as two integer columns unless told.
+    pub decimal_comma: bool,
+}
+
+/// A text file's decimal separator.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub(super) enum Separator {
+    Point,
+    /// Under many European locales a DAQ or spreadsheet writes `0,0125;-0,31`: cells are
+    /// then split on semicolons, tabs and spaces only.
+    Comma,
+}
+
+impl Separator {
+    /// The separator the data lines of `lines` write: a comma when told, or when every
+    /// line that reads as numbers either way reads with the comma as the decimal point,
+    /// some line has several cells (a semicolon, tab or space between them, so that a
+    /// comma cannot be the delimiter) and some cell has a comma; else a point. A comma
+    /// must sit between digits (`0, 1` is a comma-delimited row, not `0.` and `1`).
+    pub(super) fn of(lines: &[&str], told_comma: bool) -> Separator {
+        if told_comma {
+            return Separator::Comma;
+        }
+        let data = lines.iter().filter(|l| !is_comment(l)).filter(|l| {
+            numbers_in(l, Separator::Point).is_some() || numbers_in(l, Separator::Comma).is_some()
+        });
+        let (mut several, mut comma) = (false, false);
+        for line in data {
+            let Some(v) = numbers_in(line, Separator::Comma) else {
+                return Separator::Point;
+            };
+            several |= v.len() > 1;
+            comma |= line.contains(',');
+        }
+        match several && comma {
+            true => Separator::Comma,
+            false => Separator::Point,
+        }
+    }
 }
 
 /// A ground motion as read: uniform samples of acceleration, in m/s^2.
@@ -134,11 +175,34 @@ fn check_motion(m: &GroundMotion, file: &str) -> Result<(), MotionError> {
 /// A line's numbers split on commas, semicolons, tabs or spaces; `None` if a cell is not
 /// a number.
 pub(super) fn numbers(line: &str) -> Option<Vec<f64>> {
-    cells(line).map(|c| c.parse::<f64>().ok()).collect()
+    numbers_in(line, Separator::Point)
 }
 
-fn cells(line: &str) -> impl Iterator<Item = &str> {
-    line.split(|c: char| c == ',' || c == ';' || c.is_whitespace())
+/// A line's numbers written with the decimal separator `sep`; `None` if a cell is not a
+/// number.
+fn numbers_in(line: &str, sep: Separator) -> Option<Vec<f64>> {
+    cells(line, sep).map(|c| number(c, sep)).collect()
+}
+
+fn number(cell: &str, sep: Separator) -> Option<f64> {
+    match sep {
+        Separator::Point => cell.parse().ok(),
+        Separator::Comma => {
+            let digit = |c: Option<char>| c.is_some_and(|c| c.is_ascii_digit());
+            let between_digits = cell.match_indices(',').all(|(k, _)| {
+                digit(cell[..k].chars().next_back()) && digit(cell[k + 1..].chars().next())
+            });
+            let one = cell.matches(',').count() <= 1 && !cell.contains('.');
+            (between_digits && one)
+                .then(|| cell.replace(',', ".").parse().ok())
+                .flatten()
+        }
+    }
+}
+
+fn cells(line: &str, sep: Separator) -> impl Iterator<Item = &str> {
+    let comma_splits = sep == Separator::Point;
+    line.split(move |c: char| (comma_splits && c == ',') || c == ';' || c.is_whitespace())
         .filter(|c| !c.is_empty())
 }
 
@@ -160,24 +224,28 @@ fn read_columns(
     };
     let mut rows: Vec<(usize, Vec<f64>)> = Vec::new();
     let mut header: Option<(usize, Vec<String>)> = None;
+    let lines: Vec<&str> = lines
+        .iter()
+        .map(|l| l.trim_start_matches('\u{feff}'))
+        .collect();
+    let sep = Separator::of(&lines, options.decimal_comma);
     for (i, line) in lines.iter().enumerate() {
-        let line = line.trim_start_matches('\u{feff}');
         if is_comment(line) {
             continue;
         }
-        match numbers(line) {
+        match numbers_in(line, sep) {
             Some(v) => rows.push((i + 1, v)),
             None if header.is_none() && rows.is_empty() => {
                 header = Some((
                     i + 1,
-                    cells(line)
+                    cells(line, sep)
                         .map(|c| c.trim_matches('"').to_string())
                         .collect(),
                 ))
             }
             None => {
-                let bad = cells(line)
-                    .find(|c| c.parse::<f64>().is_err())
+                let bad = cells(line, sep)
+                    .find(|c| number(c, sep).is_none())
                     .unwrap_or("");
                 return Err(err_at(i + 1, format!("`{bad}` is not a number")));
             }
@@ -226,10 +294,14 @@ fn read_columns(
     Ok(GroundMotion {
         step_s,
         source: format!(
-            "{file}: column `{}` in {} ({}), step {step_s} s from {step_from}",
+            "{file}: column `{}` in {} ({}), step {step_s} s from {step_from}{}",
             layout.acceleration_name,
             layout.unit.name(),
-            layout.unit_from
+            layout.unit_from,
+            match sep {
+                Separator::Comma => ", decimal commas",
+                Separator::Point => "",
+            }
         ),
         acceleration_m_s2: acceleration,
     })
@@ -467,6 +539,40 @@ mod tests {
         };
         let e = read_columns(&lines(text), "f", &opts).unwrap_err();
         assert!(e.to_string().contains("--dt"), "{e}");
+    }
+
+    #[test]
+    fn decimal_commas_are_read_where_a_delimiter_makes_them_unambiguous() {
+        let opts = ReadOptions {
+            unit: Some(AccelerationUnit::MetrePerSecondSquared),
+            ..Default::default()
+        };
+        let want = [0.0, 0.5, -0.25, 1.5e-3];
+        for text in [
+            "0,000;0,0\n0,010;0,5\n0,020;-0,25\n0,030;1,5e-3\n",
+            "time_s\tacceleration_m_s2\n0,00\t0\n0,01\t0,5\n0,02\t-0,25\n0,03\t1,5e-3\n",
+        ] {
+            let m = read_columns(&lines(text), "f", &opts).unwrap();
+            assert!((m.step_s - 0.01).abs() < 1e-12, "{text}: {}", m.step_s);
+            assert_eq!(m.acceleration_m_s2, want, "{text}");
+            assert!(m.source.contains("decimal commas"), "{}", m.source);
+        }
+        // a comma and a space delimit integers: not `0.` and `1`
+        let m = read_columns(&lines("0, 1\n1, 2\n2, 3\n"), "f", &opts).unwrap();
+        assert_eq!((m.step_s, m.acceleration_m_s2[2]), (1.0, 3.0));
+        // one column of `0,5` is two integer columns unless told
+        let one = "0,5\n0,25\n-1,0\n";
+        assert_eq!(Separator::of(&lines(one), false), Separator::Point);
+        let told = ReadOptions {
+            step_s: Some(0.01),
+            decimal_comma: true,
+            ..opts
+        };
+        let m = read_columns(&lines(one), "f", &told).unwrap();
+        assert_eq!(m.acceleration_m_s2, [0.5, 0.25, -1.0]);
+        // a thousands point is not a number
+        let e = read_columns(&lines("0;1\n1;1.000,5\n"), "f", &told).unwrap_err();
+        assert!(e.to_string().contains("`1.000,5` is not a number"), "{e}");
     }
 
     #[test]

@@ -54,6 +54,10 @@ struct ImportArgs {
     /// The acceleration column (a header name or a 1-based number).
     #[arg(long)]
     column: Option<String>,
+    /// The file writes decimal commas (`0,0125`). Only needed for a file of one column:
+    /// with a semicolon, tab or space between cells they are recognised.
+    #[arg(long)]
+    decimal_comma: bool,
     /// Peak acceleration of the target, with its unit: 0.3g, 2.94m/s2, 294gal.
     #[arg(long)]
     scale_pga: Option<String>,
@@ -166,6 +170,7 @@ fn import(a: ImportArgs) -> anyhow::Result<()> {
         step_s: a.dt,
         unit,
         column: a.column.clone(),
+        decimal_comma: a.decimal_comma,
     };
     let motion = read_motion(&a.file, &read)?;
     let seconds = motion.acceleration_m_s2.len() as f64 * motion.step_s + 2.0 * a.pad_s;
