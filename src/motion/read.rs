@@ -276,8 +276,9 @@ fn read_columns(
     let (step_s, step_from) = match layout.time {
         Some(t) => {
             let times: Vec<(usize, f64)> = rows.iter().map(|(l, r)| (*l, r[t])).collect();
+            let step = uniform_step(&times, file, options.step_s);
             (
-                uniform_step(&times, file, options.step_s)?,
+                step.map_err(|e| with_comma_hint(e, &lines, sep))?,
                 "its time column",
             )
         }
@@ -305,6 +306,26 @@ fn read_columns(
         ),
         acceleration_m_s2: acceleration,
     })
+}
+
+/// `e` with a hint when the file may be one column of decimal commas (`0,5` on every
+/// line), which reads as a time and an acceleration column of integers.
+fn with_comma_hint(e: MotionError, lines: &[&str], sep: Separator) -> MotionError {
+    let data = lines.iter().filter(|l| !is_comment(l));
+    let one_comma_column = sep == Separator::Point
+        && data
+            .into_iter()
+            .all(|l| numbers_in(l, Separator::Comma).is_some_and(|v| v.len() == 1));
+    match (one_comma_column, e) {
+        (true, MotionError::Line { file, line, message }) => MotionError::Line {
+            file,
+            line,
+            message: format!(
+                "{message} (if the file is one column written with decimal commas, give --decimal-comma)"
+            ),
+        },
+        (_, e) => e,
+    }
 }
 
 /// Which columns hold time and acceleration, and the acceleration's unit.
@@ -566,8 +587,10 @@ mod tests {
         let told = ReadOptions {
             step_s: Some(0.01),
             decimal_comma: true,
-            ..opts
+            ..opts.clone()
         };
+        let e = read_columns(&lines(one), "f", &opts).unwrap_err();
+        assert!(e.to_string().contains("give --decimal-comma"), "{e}");
         let m = read_columns(&lines(one), "f", &told).unwrap();
         assert_eq!(m.acceleration_m_s2, [0.5, 0.25, -1.0]);
         // a thousands point is not a number
