@@ -47,6 +47,16 @@ fn import_elcentro(dir: &Path, extra: &[&str]) -> PathBuf {
     out
 }
 
+/// El Centro's values as its file writes them, one a line.
+fn elcentro_values() -> Vec<String> {
+    std::fs::read_to_string(ELCENTRO)
+        .unwrap()
+        .lines()
+        .filter(|l| !l.starts_with('#') && !l.trim().is_empty())
+        .map(|l| l.trim().to_string())
+        .collect()
+}
+
 fn peak(v: &[f64]) -> f64 {
     v.iter().fold(0.0_f64, |m, x| m.max(x.abs()))
 }
@@ -96,11 +106,9 @@ fn elcentro_becomes_a_target_at_rest_with_the_pga_asked() {
 #[test]
 fn a_peer_at2_file_reads_as_the_same_record() {
     let dir = tmp("at2");
-    let values: Vec<String> = std::fs::read_to_string(ELCENTRO)
-        .unwrap()
-        .lines()
-        .filter(|l| !l.starts_with('#'))
-        .map(|l| format!("{:>15}", l.trim()))
+    let values: Vec<String> = elcentro_values()
+        .iter()
+        .map(|v| format!("{v:>15}"))
         .collect();
     let mut at2 = format!(
         "PEER NGA STRONG MOTION DATABASE RECORD\nImperial Valley, 5/19/1940, El Centro, 180\n\
@@ -145,11 +153,9 @@ fn a_peer_at2_file_reads_as_the_same_record() {
 #[test]
 fn a_decimal_comma_export_reads_as_the_same_record() {
     let dir = tmp("comma");
-    let values: Vec<String> = std::fs::read_to_string(ELCENTRO)
-        .unwrap()
-        .lines()
-        .filter(|l| !l.starts_with('#') && !l.trim().is_empty())
-        .map(|l| l.trim().replace('.', ","))
+    let values: Vec<String> = elcentro_values()
+        .iter()
+        .map(|v| v.replace('.', ","))
         .collect();
     let rows: Vec<String> = values
         .iter()

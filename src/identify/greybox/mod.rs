@@ -6,7 +6,8 @@
 //!
 //! - What is freed and what is held by convention: [`structure`].
 //! - Starts read off the measured response: [`start`]; several oil-column starts when no
-//!   resonance shows, each refined on the first [`EXCERPT_S`] of the tests, the best
+//!   resonance shows, each refined on the first seconds of the tests ([`EXCERPT_S`]
+//!   each, less when there are many), the best
 //!   refined on everything.
 //! - Estimation and validation tests: [`split`]; the figures of a test the fit did not
 //!   see are predictions ([`compare`]).
@@ -41,6 +42,14 @@ use structure::Structure;
 /// Seconds of each estimation test the starts are compared on: several loop time
 /// constants and many cycles of any oil column, at a fraction of the full fit's cost.
 pub const EXCERPT_S: f64 = 20.0;
+/// Seconds of all estimation tests together the starts are compared on, shared among
+/// them down to [`MIN_EXCERPT_S`] each: the starts are refined on several tests' first
+/// seconds, which cost as much as a full fit's iterations once a campaign has more than
+/// two (the starts were over half of `identify` on the four UTFSM estimation tests).
+const EXCERPT_TOTAL_S: f64 = 40.0;
+/// Fewest seconds of a test in the excerpt: still over a hundred time constants of a
+/// loop at 16 1/s and hundreds of cycles of an oil column.
+const MIN_EXCERPT_S: f64 = 10.0;
 /// Iterations of each start's refinement on the excerpt.
 const START_ITERATIONS: usize = 12;
 /// Iterations of the final fit.
@@ -128,7 +137,8 @@ pub fn fit_closed_loop(
             "closed loop: every parameter is known or identified, nothing to fit",
         ));
     }
-    let excerpt = targets(c, &estimation, &s, Some(EXCERPT_S));
+    let share = (EXCERPT_TOTAL_S / estimation.len() as f64).clamp(MIN_EXCERPT_S, EXCERPT_S);
+    let excerpt = targets(c, &estimation, &s, Some(share));
     let starts = starting_points(&p0, c, &estimation, &s);
     let mut best: Option<(Params, f64)> = None;
     for q in &starts {
