@@ -311,10 +311,10 @@ fn read_columns(
 /// `e` with a hint when the file may be one column of decimal commas (`0,5` on every
 /// line), which reads as a time and an acceleration column of integers.
 fn with_comma_hint(e: MotionError, lines: &[&str], sep: Separator) -> MotionError {
-    let data = lines.iter().filter(|l| !is_comment(l));
     let one_comma_column = sep == Separator::Point
-        && data
-            .into_iter()
+        && lines
+            .iter()
+            .filter(|l| !is_comment(l))
             .all(|l| numbers_in(l, Separator::Comma).is_some_and(|v| v.len() == 1));
     match (one_comma_column, e) {
         (true, MotionError::Line { file, line, message }) => MotionError::Line {
