@@ -148,8 +148,9 @@ fn a_peer_at2_file_reads_as_the_same_record() {
     assert!(!ok && stderr.contains("ELCENTRO.AT2:3:"), "{stderr}");
 }
 
-/// El Centro as a European DAQ or spreadsheet exports it, `Zeit;Beschleunigung` rows with
-/// decimal commas, reads as the same record; and as one column when told.
+/// El Centro as a European DAQ or spreadsheet exports it, rows of time and acceleration
+/// with decimal commas (`0,01;-0,00602871`), reads as the same record; and as one column
+/// when told.
 #[test]
 fn a_decimal_comma_export_reads_as_the_same_record() {
     let dir = tmp("comma");
