@@ -4,6 +4,7 @@
 
 use super::{MotionError, STANDARD_GRAVITY_M_S2};
 use crate::campaign::files::{decode_utf8, lines_any, read_regular};
+use crate::campaign::format::Decimal;
 use std::path::Path;
 
 /// Largest ground-motion file read: 100 MB holds about 10 million samples as text, hours
@@ -74,45 +75,35 @@ pub struct ReadOptions {
     /// The acceleration column: a header name, or a 1-based number.
     pub column: Option<String>,
     /// The file writes decimal commas (`0,0125`). Found without being told where a line
-    /// has several cells ([`Separator::of`]); a file of one column of such numbers
+    /// has several cells ([`decimal_of`]); a file of one column of such numbers
     /// reads as two integer columns unless told.
     pub decimal_comma: bool,
 }
 
-/// A text file's decimal separator.
-#[derive(Debug, Clone, Copy, PartialEq)]
-pub(super) enum Separator {
-    Point,
-    /// Under many European locales a DAQ or spreadsheet writes `0,0125;-0,31`: cells are
-    /// then split on semicolons, tabs and spaces only.
-    Comma,
-}
-
-impl Separator {
-    /// The separator the data lines of `lines` write: a comma when told, or when every
-    /// line that reads as numbers either way reads with the comma as the decimal point,
-    /// some line has several cells (a semicolon, tab or space between them, so that a
-    /// comma cannot be the delimiter) and some cell has a comma; else a point. A comma
-    /// must sit between digits (`0, 1` is a comma-delimited row, not `0.` and `1`).
-    pub(super) fn of(lines: &[&str], told_comma: bool) -> Separator {
-        if told_comma {
-            return Separator::Comma;
+/// The decimal separator the data lines of `lines` write: a comma when told, or when
+/// every line that reads as numbers either way reads with the comma as the decimal
+/// point, some line has several cells (a semicolon, tab or space between them, so that a
+/// comma cannot be the delimiter) and some cell has a comma; else a point. Under many
+/// European locales a DAQ or spreadsheet writes `0,0125;-0,31`. A comma must sit between
+/// digits (`0, 1` is a comma-delimited row, not `0.` and `1`).
+fn decimal_of(lines: &[&str], told_comma: bool) -> Decimal {
+    if told_comma {
+        return Decimal::Comma;
+    }
+    let (mut several, mut comma) = (false, false);
+    for line in lines.iter().filter(|l| !is_comment(l)) {
+        match numbers_in(line, Decimal::Comma) {
+            Some(v) => {
+                several |= v.len() > 1;
+                comma |= line.contains(',');
+            }
+            None if numbers_in(line, Decimal::Point).is_some() => return Decimal::Point,
+            None => {} // a header line
         }
-        let data = lines.iter().filter(|l| !is_comment(l)).filter(|l| {
-            numbers_in(l, Separator::Point).is_some() || numbers_in(l, Separator::Comma).is_some()
-        });
-        let (mut several, mut comma) = (false, false);
-        for line in data {
-            let Some(v) = numbers_in(line, Separator::Comma) else {
-                return Separator::Point;
-            };
-            several |= v.len() > 1;
-            comma |= line.contains(',');
-        }
-        match several && comma {
-            true => Separator::Comma,
-            false => Separator::Point,
-        }
+    }
+    match several && comma {
+        true => Decimal::Comma,
+        false => Decimal::Point,
     }
 }
 
@@ -175,19 +166,19 @@ fn check_motion(m: &GroundMotion, file: &str) -> Result<(), MotionError> {
 /// A line's numbers split on commas, semicolons, tabs or spaces; `None` if a cell is not
 /// a number.
 pub(super) fn numbers(line: &str) -> Option<Vec<f64>> {
-    numbers_in(line, Separator::Point)
+    numbers_in(line, Decimal::Point)
 }
 
 /// A line's numbers written with the decimal separator `sep`; `None` if a cell is not a
 /// number.
-fn numbers_in(line: &str, sep: Separator) -> Option<Vec<f64>> {
+fn numbers_in(line: &str, sep: Decimal) -> Option<Vec<f64>> {
     cells(line, sep).map(|c| number(c, sep)).collect()
 }
 
-fn number(cell: &str, sep: Separator) -> Option<f64> {
+fn number(cell: &str, sep: Decimal) -> Option<f64> {
     match sep {
-        Separator::Point => cell.parse().ok(),
-        Separator::Comma => {
+        Decimal::Point => cell.parse().ok(),
+        Decimal::Comma => {
             let digit = |c: Option<char>| c.is_some_and(|c| c.is_ascii_digit());
             let between_digits = cell.match_indices(',').all(|(k, _)| {
                 digit(cell[..k].chars().next_back()) && digit(cell[k + 1..].chars().next())
@@ -200,8 +191,8 @@ fn number(cell: &str, sep: Separator) -> Option<f64> {
     }
 }
 
-fn cells(line: &str, sep: Separator) -> impl Iterator<Item = &str> {
-    let comma_splits = sep == Separator::Point;
+fn cells(line: &str, sep: Decimal) -> impl Iterator<Item = &str> {
+    let comma_splits = sep == Decimal::Point;
     line.split(move |c: char| (comma_splits && c == ',') || c == ';' || c.is_whitespace())
         .filter(|c| !c.is_empty())
 }
@@ -228,7 +219,7 @@ fn read_columns(
         .iter()
         .map(|l| l.trim_start_matches('\u{feff}'))
         .collect();
-    let sep = Separator::of(&lines, options.decimal_comma);
+    let sep = decimal_of(&lines, options.decimal_comma);
     for (i, line) in lines.iter().enumerate() {
         if is_comment(line) {
             continue;
@@ -300,8 +291,8 @@ fn read_columns(
             layout.unit.name(),
             layout.unit_from,
             match sep {
-                Separator::Comma => ", decimal commas",
-                Separator::Point => "",
+                Decimal::Comma => ", decimal commas",
+                Decimal::Point => "",
             }
         ),
         acceleration_m_s2: acceleration,
@@ -310,12 +301,12 @@ fn read_columns(
 
 /// `e` with a hint when the file may be one column of decimal commas (`0,5` on every
 /// line), which reads as a time and an acceleration column of integers.
-fn with_comma_hint(e: MotionError, lines: &[&str], sep: Separator) -> MotionError {
-    let one_comma_column = sep == Separator::Point
+fn with_comma_hint(e: MotionError, lines: &[&str], sep: Decimal) -> MotionError {
+    let one_comma_column = sep == Decimal::Point
         && lines
             .iter()
             .filter(|l| !is_comment(l))
-            .all(|l| numbers_in(l, Separator::Comma).is_some_and(|v| v.len() == 1));
+            .all(|l| numbers_in(l, Decimal::Comma).is_some_and(|v| v.len() == 1));
     match (one_comma_column, e) {
         (true, MotionError::Line { file, line, message }) => MotionError::Line {
             file,
@@ -583,7 +574,7 @@ mod tests {
         assert_eq!((m.step_s, m.acceleration_m_s2[2]), (1.0, 3.0));
         // one column of `0,5` is two integer columns unless told
         let one = "0,5\n0,25\n-1,0\n";
-        assert_eq!(Separator::of(&lines(one), false), Separator::Point);
+        assert_eq!(decimal_of(&lines(one), false), Decimal::Point);
         let told = ReadOptions {
             step_s: Some(0.01),
             decimal_comma: true,
