@@ -1,10 +1,12 @@
 //! Where the residual the final model leaves lies (issue 17 part 4): the report cells it
 //! still misses, worst first, each with the octave band that holds most of its residual
 //! and what the residual depends on (direction of motion, amplitude, speed, load
-//! pressure). This is what an engineer needs to look for physics no catalogue row
-//! describes.
+//! pressure), and what a sensor's scale, offset or latency would remove of it
+//! ([`super::calibration`]). This is what an engineer needs to look for physics no
+//! catalogue row describes.
 
 use super::output::{PartRows, UnexplainedCell};
+use super::calibration::{removed_by, sensor_findings, RemovedBy, SensorFinding};
 use super::part::Part;
 use super::residuals::{channel_bands, padded, predict, Channel, NoiseFloor, PerChannel};
 use super::EXPLAINED_RATIO;
@@ -73,6 +75,18 @@ pub(super) fn unexplained_cells(
         .collect()
 }
 
+/// The [`SensorFinding`]s of the located `cells` ([`sensor_findings`]).
+pub(super) fn findings(c: &Campaign, cells: &[UnexplainedCell]) -> Vec<SensorFinding> {
+    let rated: Vec<(&str, RemovedBy, f64)> = cells
+        .iter()
+        .filter_map(|u| {
+            let i = c.info.tests.iter().position(|t| t.name == u.test)?;
+            Some((u.channel.as_str(), u.removed_by?, c.sample_rate_of(i)))
+        })
+        .collect();
+    sensor_findings(&rated)
+}
+
 /// One cell located: its worst band and its dependences.
 fn locate(
     p: &Params,
@@ -109,6 +123,8 @@ fn locate(
             (o.pressure_a_pa - o.pressure_b_pa).abs()
         }),
     };
+    let simulated: Vec<f64> = run.iter().map(|o| ch.simulated(o)).collect();
+    let removed_by = removed_by(&m[range], &simulated, c.sample_rate_of(i), s);
     Some(UnexplainedCell {
         test: c.info.tests[i].name.clone(),
         channel: ch.name().to_string(),
@@ -116,6 +132,7 @@ fn locate(
         residual,
         band_residual,
         depends_on,
+        removed_by,
     })
 }
 

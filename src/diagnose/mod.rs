@@ -44,6 +44,7 @@
 
 mod baseline;
 mod candidates;
+pub mod calibration;
 mod direction_starts;
 mod effect;
 mod effort;

@@ -126,6 +126,10 @@ pub struct UnexplainedCell {
     /// What the residual depends on, where measurable: RMS residual (noise units) while
     /// the table moves up against down, at large against small displacement.
     pub depends_on: super::locate::Dependence,
+    /// The cell's sample-wise RMS residual (noise units) and what the channel read with a
+    /// fitted scale and offset, or a fitted delay, would leave of it; `None` where the run
+    /// stopped in the report quarter.
+    pub removed_by: Option<super::calibration::RemovedBy>,
 }
 
 /// The whole diagnosis.
@@ -171,6 +175,8 @@ pub struct Diagnosis {
     pub extended: Params,
     /// Where the residual lies when not explained, worst first.
     pub unexplained: Vec<UnexplainedCell>,
+    /// Channels whose unexplained cells one sensor number (a scale, a delay) removes.
+    pub sensor_findings: Vec<super::calibration::SensorFinding>,
     /// Per test and channel, the fit % of the baseline and the extended model on the
     /// report quarter ([`super::fits`]).
     pub fits: Vec<super::ModelFit>,
@@ -359,6 +365,7 @@ impl Diagnosis {
             "gain": self.gain,
             "explained": self.explained,
             "unexplained": self.unexplained,
+            "sensor_findings": self.sensor_findings,
             "fits": self.fits,
             "baseline_residuals": base,
             "baseline_heldout_residual": self.baseline_heldout,

@@ -72,18 +72,28 @@ pub(super) fn write_causes(html: &mut String, md: &mut String, d: &Diagnosis) {
     if d.unexplained.is_empty() {
         return;
     }
+    for f in &d.sensor_findings {
+        let line = format!("Sensor: {}.", f.describe());
+        let _ = write!(html, "<p><b>{}</b></p>", escape_html(&line));
+        let _ = writeln!(md, "\n**{line}**");
+    }
     html.push_str(
         "<h2>What is left unexplained (report quarter, worst first)</h2>\
          <p>Residual in noise units; the band holds the cell's largest residual; the splits give \
-         the RMS residual while the condition holds / while it does not.</p>\
+         the RMS residual while the condition holds / while it does not; the last column gives \
+         the sample-wise RMS residual and what is left of it when the channel is read with a \
+         fitted scale and offset (a sensitivity, a unit, a zero) or a fitted delay (a filter, \
+         an acquisition skew): a residual one such number removes is the sensor's, not the \
+         table's.</p>\
          <table><tr><th>test</th><th>channel</th><th>band (Hz)</th><th>residual</th>\
          <th>band residual</th><th>moving + / -</th><th>large / small displacement</th>\
-         <th>fast / slow</th><th>high / low load pressure</th></tr>",
+         <th>fast / slow</th><th>high / low load pressure</th>\
+         <th>a sensor's scale, delay would leave</th></tr>",
     );
     md.push_str(
         "\n## What is left unexplained (report quarter, worst first)\n\n\
-         | test | channel | band (Hz) | residual | band residual | moving + / - | large / small displacement | fast / slow | high / low load pressure |\n\
-         |---|---|---|---|---|---|---|---|---|\n",
+         | test | channel | band (Hz) | residual | band residual | moving + / - | large / small displacement | fast / slow | high / low load pressure | a sensor's scale, delay would leave |\n\
+         |---|---|---|---|---|---|---|---|---|---|\n",
     );
     for u in &d.unexplained {
         let cells = [
@@ -96,6 +106,7 @@ pub(super) fn write_causes(html: &mut String, md: &mut String, d: &Diagnosis) {
             split_text(&u.depends_on.large_displacement),
             split_text(&u.depends_on.fast_motion),
             split_text(&u.depends_on.high_load_pressure),
+            u.removed_by.map_or("-".into(), |r| r.describe()),
         ];
         html.push_str("<tr>");
         for c in &cells {

@@ -191,9 +191,18 @@ pub fn run(args: Args) -> anyhow::Result<()> {
     );
     for u in &d.unexplained {
         println!(
-            "  unexplained: {} {} residual {:.2}, worst in {:.0}-{:.0} Hz ({:.2})",
-            u.test, u.channel, u.residual, u.band_hz[0], u.band_hz[1], u.band_residual
+            "  unexplained: {} {} residual {:.2}, worst in {:.0}-{:.0} Hz ({:.2}){}",
+            u.test,
+            u.channel,
+            u.residual,
+            u.band_hz[0],
+            u.band_hz[1],
+            u.band_residual,
+            u.removed_by.map_or(String::new(), |r| format!("; {}", r.describe()))
         );
+    }
+    for f in &d.sensor_findings {
+        println!("  sensor: {}", f.describe());
     }
     if let Some(p) = &peak {
         println!(

@@ -8,7 +8,7 @@ use crate::diagnose::baseline::{force_recorded, mass_is_scale};
 use crate::diagnose::candidates::heldout_scores;
 use crate::diagnose::effect::{Effect, EFFECTS};
 use crate::diagnose::effort::Effort;
-use crate::diagnose::locate::unexplained_cells;
+use crate::diagnose::locate::{findings, unexplained_cells};
 use crate::diagnose::missed::Missed;
 use crate::diagnose::output::{Candidate, Cause, Diagnosis, Partial};
 use crate::diagnose::part::Part;
@@ -94,6 +94,7 @@ pub(in crate::diagnose) fn diagnose_with(
             &d.noise,
         )
     };
+    let sensor_findings = findings(c, &unexplained);
     let specimen_visibility = (!force_recorded(c)
         && d.testable.contains(&Effect::Specimen)
         && !found
@@ -123,6 +124,7 @@ pub(in crate::diagnose) fn diagnose_with(
         extended_heldout,
         extended,
         unexplained,
+        sensor_findings,
         tests: c.info.tests.iter().map(|t| t.name.clone()).collect(),
         valve_model: id.params.servovalve.model,
         actuator_model: base.actuator.model,
