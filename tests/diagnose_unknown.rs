@@ -144,6 +144,7 @@ fn a_miscalibrated_accelerometer_is_unexplained_and_located_on_its_channel() {
         .iter()
         .filter(|f| f["channel"] == "acceleration")
         .collect();
+    eprintln!("sensor findings: {found:#?}");
     assert_eq!(acc.len(), 1, "{found:#?}");
     assert_eq!(acc[0]["kind"], "scale", "{found:#?}");
     let factor = acc[0]["value"].as_f64().unwrap();
@@ -162,10 +163,7 @@ const FACTOR_TOLERANCE: f64 = 0.01;
 /// disturbance), which no one scale or delay of the channel removes.
 fn no_sensor_finding_on(v: &serde_json::Value, channel: &str) {
     let found = v["sensor_findings"].as_array().unwrap();
-    assert!(
-        found.iter().all(|f| f["channel"] != channel),
-        "{found:#?}"
-    );
+    assert!(found.iter().all(|f| f["channel"] != channel), "{found:#?}");
 }
 
 #[test]

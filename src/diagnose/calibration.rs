@@ -28,11 +28,12 @@ pub struct Delayed {
     pub residual: f64,
 }
 
-/// A cell's sample-wise RMS residual (noise units) as it is, and what a [`Scaled`] or a
-/// [`Delayed`] channel would leave of it.
+/// A cell's sample-wise RMS residual (noise units) as it is and with both means removed
+/// (a zero: `centred`), and what a [`Scaled`] or a [`Delayed`] channel would leave of it.
 #[derive(Debug, Clone, Copy, PartialEq, Serialize)]
 pub struct RemovedBy {
     pub residual: f64,
+    pub centred: f64,
     pub scale: Option<Scaled>,
     pub delay: Option<Delayed>,
 }
@@ -40,7 +41,10 @@ pub struct RemovedBy {
 impl RemovedBy {
     /// One line: the sample-wise residual and what a scale or a delay leaves of it.
     pub fn describe(&self) -> String {
-        let mut text = format!("sample-wise {:.2}", self.residual);
+        let mut text = format!(
+            "sample-wise {:.2} ({:.2} centred)",
+            self.residual, self.centred
+        );
         if let Some(s) = self.scale {
             text += &format!(
                 ", read x{:.4} {:+.3e}: {:.2}",
@@ -75,8 +79,11 @@ pub fn removed_by(
         (sum / k as f64).sqrt() / noise
     };
     let residual = rms(&mut m.iter().zip(s).map(|(a, b)| a - b));
+    let (mm, ms) = (mean(m), mean(s));
+    let centred = rms(&mut m.iter().zip(s).map(|(a, b)| (a - mm) - (b - ms)));
     Some(RemovedBy {
         residual,
+        centred,
         scale: scaled(m, s).map(|(factor, offset)| Scaled {
             factor,
             offset,
@@ -89,10 +96,13 @@ pub fn removed_by(
     })
 }
 
+fn mean(x: &[f64]) -> f64 {
+    x.iter().sum::<f64>() / x.len() as f64
+}
+
 /// Least squares `m ~ k s + b`: `(k, b)`, `None` when `s` does not vary.
 fn scaled(m: &[f64], s: &[f64]) -> Option<(f64, f64)> {
-    let n = m.len() as f64;
-    let (mm, ms) = (m.iter().sum::<f64>() / n, s.iter().sum::<f64>() / n);
+    let (mm, ms) = (mean(m), mean(s));
     let (mut sxy, mut sxx) = (0.0, 0.0);
     for (a, b) in m.iter().zip(s) {
         sxy += (a - mm) * (b - ms);
@@ -171,8 +181,8 @@ pub struct SensorFinding {
     pub range: [f64; 2],
     /// The cells of the channel it holds on, of the unexplained cells listed.
     pub cells: usize,
-    /// Median sample-wise RMS residual of those cells (noise units) as they are, and as
-    /// read with the fitted number.
+    /// Median sample-wise RMS residual of those cells (noise units) with the means removed
+    /// (a sensor's zero is no finding), and as read with the fitted number.
     pub residual: f64,
     pub residual_after: f64,
     /// Median over the cells of the share of the residual above the noise that the
@@ -198,7 +208,8 @@ pub const FINDING_FACTOR_SPREAD: f64 = 0.05;
 pub const FINDING_DELAY_SPREAD_SAMPLES: f64 = 1.0;
 
 /// The [`SensorFinding`]s of the unexplained `cells` (channel name, its [`RemovedBy`],
-/// sampling rate), per channel: a scale where every cell of the channel has a factor
+/// sampling rate), per channel, each measured against the cells' centred residual: a
+/// scale where every cell of the channel has a factor
 /// within [`FINDING_FACTOR_SPREAD`] of the median and the median share left is at most
 /// [`FINDING_SHARE_LEFT`]; else a delay by the same rule (no shift of zero).
 pub fn sensor_findings(cells: &[(&str, RemovedBy, f64)]) -> Vec<SensorFinding> {
@@ -213,15 +224,17 @@ pub fn sensor_findings(cells: &[(&str, RemovedBy, f64)]) -> Vec<SensorFinding> {
         }
         let scales: Option<Vec<(f64, f64, f64)>> = of
             .iter()
-            .map(|c| c.1.scale.map(|s| (s.factor, c.1.residual, s.residual)))
+            .map(|c| c.1.scale.map(|s| (s.factor, c.1.centred, s.residual)))
             .collect();
         let delays: Option<Vec<(f64, f64, f64, f64)>> = of
             .iter()
-            .map(|c| c.1.delay.map(|d| (d.delay_s, c.1.residual, d.residual, c.2)))
+            .map(|c| c.1.delay.map(|d| (d.delay_s, c.1.centred, d.residual, c.2)))
             .collect();
         let scale = scales.and_then(|v| {
             let m = median(v.iter().map(|x| x.0));
-            let tight = v.iter().all(|x| (x.0 - m).abs() <= FINDING_FACTOR_SPREAD * m.abs());
+            let tight = v
+                .iter()
+                .all(|x| (x.0 - m).abs() <= FINDING_FACTOR_SPREAD * m.abs());
             tight.then(|| finding(ch, "scale", v.iter().map(|x| (x.0, x.1, x.2))))
         });
         let delay = || {
@@ -306,7 +319,8 @@ impl SensorFinding {
         format!(
             "the {} channel {what} on {} unexplained cells, which leaves {:.2} of their \
              residual {:.2} (median, noise units): check the sensor's calibration and \
-             acquisition before the table's physics",
+             acquisition before the table's physics (a cause named beside it was fitted to \
+             the channel as recorded, and may be the model bending to its error)",
             self.channel, self.cells, self.residual_after, self.residual
         )
     }
@@ -358,6 +372,7 @@ mod tests {
     fn cell(before: f64, factor: f64, after: f64, delay_s: f64, delayed: f64) -> RemovedBy {
         RemovedBy {
             residual: before,
+            centred: before,
             scale: Some(Scaled {
                 factor,
                 offset: 0.0,
@@ -379,7 +394,10 @@ mod tests {
             cell(1.45, 1.081, 1.17, 0.0005, 1.45),
         ];
         // a drag: the best factor differs from test to test and leaves most of it
-        let force = [cell(13.0, 1.3, 9.0, 0.0, 12.0), cell(8.0, 0.9, 7.5, 0.0, 8.0)];
+        let force = [
+            cell(13.0, 1.3, 9.0, 0.0, 12.0),
+            cell(8.0, 0.9, 7.5, 0.0, 8.0),
+        ];
         let cells: Vec<(&str, RemovedBy, f64)> = acc
             .iter()
             .map(|&r| ("acceleration", r, fs))
@@ -388,7 +406,10 @@ mod tests {
         let found = sensor_findings(&cells);
         assert_eq!(found.len(), 1, "{found:?}");
         let f = &found[0];
-        assert_eq!((f.channel.as_str(), f.kind, f.cells), ("acceleration", "scale", 3));
+        assert_eq!(
+            (f.channel.as_str(), f.kind, f.cells),
+            ("acceleration", "scale", 3)
+        );
         assert_eq!((f.value, f.range), (1.080, [1.066, 1.081]));
         // the noise is not the sensor's error: 1.45 -> 1.17 leaves 0.65 of the excess
         assert!(f.share_left > 0.3 && f.share_left < 0.5, "{f:?}");

@@ -5,8 +5,8 @@
 //! ([`super::calibration`]). This is what an engineer needs to look for physics no
 //! catalogue row describes.
 
-use super::output::{PartRows, UnexplainedCell};
 use super::calibration::{removed_by, sensor_findings, RemovedBy, SensorFinding};
+use super::output::{PartRows, UnexplainedCell};
 use super::part::Part;
 use super::residuals::{channel_bands, padded, predict, Channel, NoiseFloor, PerChannel};
 use super::EXPLAINED_RATIO;

@@ -43,8 +43,8 @@
 //!    can hide a heavy one from the table's motion, and then `none` is no evidence.
 
 mod baseline;
-mod candidates;
 pub mod calibration;
+mod candidates;
 mod direction_starts;
 mod effect;
 mod effort;

@@ -198,7 +198,8 @@ pub fn run(args: Args) -> anyhow::Result<()> {
             u.band_hz[0],
             u.band_hz[1],
             u.band_residual,
-            u.removed_by.map_or(String::new(), |r| format!("; {}", r.describe()))
+            u.removed_by
+                .map_or(String::new(), |r| format!("; {}", r.describe()))
         );
     }
     for f in &d.sensor_findings {
