@@ -126,9 +126,9 @@ pub struct UnexplainedCell {
     /// What the residual depends on, where measurable: RMS residual (noise units) while
     /// the table moves up against down, at large against small displacement.
     pub depends_on: super::locate::Dependence,
-    /// The cell's sample-wise RMS residual (noise units) and what the channel read with a
-    /// fitted scale and offset, or a fitted delay, would leave of it; `None` where the run
-    /// stopped in the report quarter.
+    /// The cell's sample-wise RMS residual (noise units), as it is and centred, and what
+    /// the channel read with a fitted scale and offset, or a fitted delay, would leave of
+    /// it ([`super::calibration`]); `None` where the run stopped in the report quarter.
     pub removed_by: Option<super::calibration::RemovedBy>,
 }
 
