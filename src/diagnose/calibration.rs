@@ -128,12 +128,18 @@ fn delayed(m: &[f64], s: &[f64], max_lag: usize) -> Option<(f64, f64)> {
         (best as f64 + 1.0).min(max_lag as f64),
     );
     let ratio = 0.5 * (5f64.sqrt() - 1.0);
+    let (mut a, mut b) = (hi - ratio * (hi - lo), lo + ratio * (hi - lo));
+    let (mut ca, mut cb) = (cost(a), cost(b));
     for _ in 0..GOLDEN_STEPS {
-        let (a, b) = (hi - ratio * (hi - lo), lo + ratio * (hi - lo));
-        if cost(a) < cost(b) {
-            hi = b;
+        // the inner point kept is the next step's other inner point
+        if ca < cb {
+            (hi, b, cb) = (b, a, ca);
+            a = hi - ratio * (hi - lo);
+            ca = cost(a);
         } else {
-            lo = a;
+            (lo, a, ca) = (a, b, cb);
+            b = lo + ratio * (hi - lo);
+            cb = cost(b);
         }
     }
     let lag = 0.5 * (lo + hi);
@@ -172,9 +178,7 @@ fn shifted_rms(m: &[f64], s: &[f64], lag: f64, max_lag: usize) -> f64 {
 #[derive(Debug, Clone, PartialEq, Serialize)]
 pub struct SensorFinding {
     pub channel: String,
-    /// `"scale"` (a sensitivity, unit or zero: `value` is the factor) or `"delay"`
-    /// (`value` in s, positive: the sensor lags the model).
-    pub kind: &'static str,
+    pub kind: SensorNumber,
     /// The median over the cells.
     pub value: f64,
     /// The smallest and largest over the cells.
@@ -188,6 +192,25 @@ pub struct SensorFinding {
     /// Median over the cells of the share of the residual above the noise that the
     /// number leaves ([`excess`]).
     pub share_left: f64,
+}
+
+/// The one number of a [`SensorFinding`].
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize)]
+#[serde(rename_all = "snake_case")]
+pub enum SensorNumber {
+    /// A sensitivity, unit or zero: the finding's value is the factor.
+    Scale,
+    /// A latency: the value in s, positive when the sensor lags the model.
+    Delay,
+}
+
+/// What one cell says of a [`SensorNumber`]: its fitted value, its centred residual and
+/// the residual the number leaves (noise units).
+#[derive(Debug, Clone, Copy)]
+struct CellNumber {
+    value: f64,
+    centred: f64,
+    after: f64,
 }
 
 /// Largest median share of a channel's residual above the noise ([`excess`]) that the
@@ -222,30 +245,44 @@ pub fn sensor_findings(cells: &[(&str, RemovedBy, f64)]) -> Vec<SensorFinding> {
         if of.len() < FINDING_MIN_CELLS {
             continue;
         }
-        let scales: Option<Vec<(f64, f64, f64)>> = of
+        let scales: Option<Vec<CellNumber>> = of
             .iter()
-            .map(|c| c.1.scale.map(|s| (s.factor, c.1.centred, s.residual)))
-            .collect();
-        let delays: Option<Vec<(f64, f64, f64, f64)>> = of
-            .iter()
-            .map(|c| c.1.delay.map(|d| (d.delay_s, c.1.centred, d.residual, c.2)))
+            .map(|(_, r, _)| {
+                r.scale.map(|s| CellNumber {
+                    value: s.factor,
+                    centred: r.centred,
+                    after: s.residual,
+                })
+            })
             .collect();
         let scale = scales.and_then(|v| {
-            let m = median(v.iter().map(|x| x.0));
+            let m = median(v.iter().map(|x| x.value));
             let tight = v
                 .iter()
-                .all(|x| (x.0 - m).abs() <= FINDING_FACTOR_SPREAD * m.abs());
-            tight.then(|| finding(ch, "scale", v.iter().map(|x| (x.0, x.1, x.2))))
+                .all(|x| (x.value - m).abs() <= FINDING_FACTOR_SPREAD * m.abs());
+            tight.then(|| finding(ch, SensorNumber::Scale, &v))
         });
         let delay = || {
-            delays.and_then(|v| {
-                let m = median(v.iter().map(|x| x.0));
-                let tight = v
-                    .iter()
-                    .all(|x| (x.0 - m).abs() * x.3 <= FINDING_DELAY_SPREAD_SAMPLES);
-                let moved = v.iter().all(|x| x.0 != 0.0);
-                (tight && moved).then(|| finding(ch, "delay", v.iter().map(|x| (x.0, x.1, x.2))))
-            })
+            let delays: Vec<(CellNumber, f64)> = of
+                .iter()
+                .map(|(_, r, rate_hz)| {
+                    r.delay.map(|d| {
+                        let n = CellNumber {
+                            value: d.delay_s,
+                            centred: r.centred,
+                            after: d.residual,
+                        };
+                        (n, *rate_hz)
+                    })
+                })
+                .collect::<Option<_>>()?;
+            let m = median(delays.iter().map(|x| x.0.value));
+            let tight = delays
+                .iter()
+                .all(|(x, rate_hz)| (x.value - m).abs() * rate_hz <= FINDING_DELAY_SPREAD_SAMPLES);
+            let moved = delays.iter().all(|x| x.0.value != 0.0);
+            let numbers: Vec<CellNumber> = delays.into_iter().map(|x| x.0).collect();
+            (tight && moved).then(|| finding(ch, SensorNumber::Delay, &numbers))
         };
         if let Some(f) = scale.filter(holds).or_else(|| delay().filter(holds)) {
             found.push(f);
@@ -265,32 +302,32 @@ fn excess(r: f64) -> f64 {
     (r * r - 1.0).max(0.0).sqrt()
 }
 
-/// A finding of `kind` on `channel` from its cells' (value, residual, residual after).
-fn finding(
-    channel: &str,
-    kind: &'static str,
-    cells: impl Iterator<Item = (f64, f64, f64)> + Clone,
-) -> SensorFinding {
-    let lo = cells.clone().map(|x| x.0).fold(f64::INFINITY, f64::min);
-    let hi = cells.clone().map(|x| x.0).fold(f64::NEG_INFINITY, f64::max);
+/// A finding of `kind` on `channel` from what its cells say of it.
+fn finding(channel: &str, kind: SensorNumber, cells: &[CellNumber]) -> SensorFinding {
+    let values = || cells.iter().map(|x| x.value);
     let shares = cells
-        .clone()
-        .filter(|x| excess(x.1) > 0.0)
-        .map(|x| excess(x.2) / excess(x.1));
+        .iter()
+        .filter(|x| excess(x.centred) > 0.0)
+        .map(|x| excess(x.after) / excess(x.centred));
     SensorFinding {
         channel: channel.to_string(),
         kind,
-        value: median(cells.clone().map(|x| x.0)),
-        range: [lo, hi],
-        cells: cells.clone().count(),
-        residual: median(cells.clone().map(|x| x.1)),
-        residual_after: median(cells.map(|x| x.2)),
+        value: median(values()),
+        range: [
+            values().fold(f64::INFINITY, f64::min),
+            values().fold(f64::NEG_INFINITY, f64::max),
+        ],
+        cells: cells.len(),
+        residual: median(cells.iter().map(|x| x.centred)),
+        residual_after: median(cells.iter().map(|x| x.after)),
         // no cell above the noise (a NaN median): nothing for a number to remove
         share_left: median(shares).min(f64::INFINITY),
     }
 }
 
-/// The median of `x` (the mean of the middle two for an even count); NaN when empty.
+/// The median of `x` (the mean of the middle two for an even count); NaN when empty. Not
+/// [`super::residuals::median`], whose upper middle would give a finding of two cells
+/// the value of one of them.
 fn median(x: impl Iterator<Item = f64>) -> f64 {
     let mut v: Vec<f64> = x.collect();
     v.sort_by(f64::total_cmp);
@@ -305,11 +342,11 @@ impl SensorFinding {
     /// One line for the terminal and the report.
     pub fn describe(&self) -> String {
         let what = match self.kind {
-            "scale" => format!(
+            SensorNumber::Scale => format!(
                 "reads {:.4} times the model (from {:.4} to {:.4})",
                 self.value, self.range[0], self.range[1]
             ),
-            _ => format!(
+            SensorNumber::Delay => format!(
                 "lags the model by {:.2} ms (from {:.2} to {:.2})",
                 1e3 * self.value,
                 1e3 * self.range[0],
@@ -408,7 +445,7 @@ mod tests {
         let f = &found[0];
         assert_eq!(
             (f.channel.as_str(), f.kind, f.cells),
-            ("acceleration", "scale", 3)
+            ("acceleration", SensorNumber::Scale, 3)
         );
         assert_eq!((f.value, f.range), (1.080, [1.066, 1.081]));
         // the noise is not the sensor's error: 1.45 -> 1.17 leaves 0.65 of the excess
@@ -426,7 +463,7 @@ mod tests {
             .collect();
         let found = sensor_findings(&cells);
         assert_eq!(found.len(), 1, "{found:?}");
-        assert_eq!(found[0].kind, "delay");
+        assert_eq!(found[0].kind, SensorNumber::Delay);
         assert!((found[0].value - 0.00335).abs() < 1e-12, "{found:?}");
         // delays 3 samples apart are no one latency
         let apart: Vec<(&str, RemovedBy, f64)> = [(40.0, 0.001, 2.0), (12.0, 0.004, 1.5)]
