@@ -482,6 +482,16 @@ impl Diagnoser<'_> {
             ),
         );
         let mut best = self.polish_best(&candidates[k], &missed, &hold);
+        if trace_enabled() {
+            eprintln!(
+                "  search {}: {} polished from score {:.4} to {:.4} (current {:.4})",
+                round + 1,
+                best.effect.name(),
+                candidates[k].score,
+                best.score,
+                missed.rms(&current.select.score)
+            );
+        }
         // a specimen whose last mode the polish leaves no evidence of (moved to a bound):
         // the specimen with one mode fewer, polished in its place
         while best.not_evidence.is_some() {
