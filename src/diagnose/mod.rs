@@ -52,6 +52,7 @@ mod evidence;
 mod fits;
 mod free_play_fit;
 mod free_play_start;
+pub mod kinematics;
 mod locate;
 mod missed;
 pub mod model_error;

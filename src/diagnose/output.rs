@@ -177,6 +177,9 @@ pub struct Diagnosis {
     pub unexplained: Vec<UnexplainedCell>,
     /// Channels whose unexplained cells one sensor number (a scale, a delay) removes.
     pub sensor_findings: Vec<super::calibration::SensorFinding>,
+    /// The accelerometer against the LVDT's second derivative, from the recordings alone;
+    /// `None` when no test recorded both.
+    pub kinematics: Option<super::kinematics::KinematicCheck>,
     /// Per test and channel, the fit % of the baseline and the extended model on the
     /// report quarter ([`super::fits`]).
     pub fits: Vec<super::ModelFit>,
@@ -366,6 +369,7 @@ impl Diagnosis {
             "explained": self.explained,
             "unexplained": self.unexplained,
             "sensor_findings": self.sensor_findings,
+            "kinematics": self.kinematics,
             "fits": self.fits,
             "baseline_residuals": base,
             "baseline_heldout_residual": self.baseline_heldout,

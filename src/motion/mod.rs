@@ -11,7 +11,7 @@ pub mod figures;
 pub mod metrics;
 pub mod prepare;
 pub mod read;
-mod spectrum;
+pub(crate) mod spectrum;
 pub mod target_file;
 pub mod transfer;
 pub mod tune;

@@ -69,6 +69,11 @@ pub(super) fn write_causes(html: &mut String, md: &mut String, d: &Diagnosis) {
         let _ = write!(html, "<p>{}</p>", escape_html(&line));
         let _ = writeln!(md, "\n{line}");
     }
+    if let Some(f) = d.kinematics.as_ref().and_then(|k| k.finding.as_ref()) {
+        let line = format!("Sensors: {f}.");
+        let _ = write!(html, "<p><b>{}</b></p>", escape_html(&line));
+        let _ = writeln!(md, "\n**{line}**");
+    }
     if d.unexplained.is_empty() {
         return;
     }

@@ -300,6 +300,9 @@ fn run_check(a: CheckArgs) -> anyhow::Result<()> {
         "{}",
         shaketable::report::read::screening_text(&screening.findings)
     );
+    if let Some(k) = shaketable::diagnose::kinematics::check(&c) {
+        println!("{}", k.text());
+    }
     if let Err(e) = c.gains_known() {
         println!("not simulated: {e}");
         return Ok(());

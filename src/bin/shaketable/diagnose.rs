@@ -205,6 +205,9 @@ pub fn run(args: Args) -> anyhow::Result<()> {
     for f in &d.sensor_findings {
         println!("  sensor: {}", f.describe());
     }
+    if let Some(k) = &d.kinematics {
+        println!("  {}", k.text().replace('\n', "\n  "));
+    }
     if let Some(p) = &peak {
         println!(
             "  model-error response of {} {} (per {}) peaks at {:.2} Hz: gain {:.3e} {}, coherence {:.2}",

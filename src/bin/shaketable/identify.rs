@@ -70,6 +70,10 @@ pub fn run(args: Args) -> anyhow::Result<()> {
         "{}",
         shaketable::report::read::screening_text(&id.screening)
     );
+    // a model identified from motion sensors at odds bends to their error
+    if let Some(k) = shaketable::diagnose::kinematics::check(&campaign) {
+        println!("{}", k.text());
+    }
     for m in &id.missing {
         println!("not identified: {m}");
     }
