@@ -221,8 +221,8 @@ fn describe(k: &KinematicCheck) -> Option<String> {
 /// accelerometer (Welch, Hann segments), over the bins of `band_hz` where the two are
 /// coherent ([`MIN_COHERENCE`]), read as one gain and one delay: the delay from the
 /// phase's slope and the gain from the log magnitude, each bin weighted by the inverse
-/// variance its coherence gives (`(1 - g^2) / (2 n g^2)` for `n` segments, Bendat &
-/// Piersol 9.52). The magnitude is the geometric mean of H1 and H2, which the noise on
+/// variance its coherence gives (`(1 - g^2) / (2 n g^2)` for `n` segments: Bendat &
+/// Piersol, Random Data, 4th ed., section 9.2). The magnitude is the geometric mean of H1 and H2, which the noise on
 /// either side biases in opposite directions. `None` for a test too short or with too
 /// few coherent bins.
 fn read_pair(x: &[f64], a: &[f64], fs: f64, band_hz: [f64; 2]) -> Option<PairReading> {
