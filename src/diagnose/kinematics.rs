@@ -135,8 +135,9 @@ pub fn check(c: &Campaign) -> Option<KinematicCheck> {
         };
         tests += 1;
         let fs = c.sample_rate_of(i);
-        band_hz[1] = band_hz[1].min(fs / 8.0);
-        let reading = read_pair(x, a, fs, [BAND_LOW_HZ, BAND_HIGH_HZ.min(fs / 8.0)]);
+        let high_hz = BAND_HIGH_HZ.min(fs / 8.0);
+        band_hz[1] = band_hz[1].min(high_hz);
+        let reading = read_pair(x, a, fs, [BAND_LOW_HZ, high_hz]);
         if super::trace_enabled() {
             eprintln!("  kinematics {}: {reading:?}", c.info.tests[i].name);
         }
