@@ -5,18 +5,27 @@
 //! 1. Write one file like [`valve_deadband`] (the smallest): its parameter struct (with
 //!    `enabled` and serde defaults), a `pub const EFFECT: Effect` declaring its FMU switch
 //!    and each parameter once with [`parameter!`] (TOML key, unit, description, FMU name
-//!    and value reference, validation rule, diagnosis fitting range), the test kinds where
-//!    its signature lives, and its physics hook: the small functions the model calls.
+//!    and value reference, validation rule, diagnosis fitting range), the test kinds and
+//!    channels where its signature lives, its no-effect values, and its physics hook: the
+//!    small functions the model calls.
 //! 2. Add the file to the `mod` list and its `EFFECT` to [`CATALOGUE`], and the struct as a
 //!    field of [`crate::params::Params`] (its TOML block, named like the effect).
-//! 3. Call the physics hook from `src/model/`.
-//! 4. Tests: the catalogue tests below check that every parameter appears once in the
+//! 3. Call the physics hook from `src/model/` (the block it acts in: `actuator.rs`,
+//!    `friction.rs`, `payload.rs`, ...). An effect with states of its own (an oscillator,
+//!    the free play's rod) also lists them in `src/fmi/variables/states.rs` and, where the
+//!    linearisation applies, in `src/linear/` (`plant.rs`, `jacobian.rs`).
+//! 4. For the diagnosis: a variant of [`crate::diagnose::Effect`] (in the catalogue's
+//!    order, with the paper's tests its signature picks), and its starts in
+//!    `src/diagnose/starts.rs` (a grid, and a start read off the data where one can be).
+//! 5. Tests: the catalogue tests below check that every parameter appears once in the
 //!    parameter file, in the FMU variables and in `--effect` parsing, with unique names
-//!    and value references; add a physics test of the effect in `tests/physics.rs`.
+//!    and value references; add a physics test of the effect in `tests/physics.rs` and a
+//!    seeded draw to `tests/diagnose_hidden.rs`.
 //!
-//! The parameter validation, `numeric_entries`, the `--effect name:key=value` syntax,
-//! the FMU variable rows (`src/fmi/variables.rs`) and campaign synthesis read the
-//! catalogue; nothing else needs an edit.
+//! The parameter validation, `numeric_entries`, the `--effect name:key=value` syntax and
+//! its help, the FMU variable rows (`src/fmi/variables/table.rs`), campaign synthesis, the
+//! diagnosis' parameters, fitting bounds (scaled to the table), evidence rule and
+//! testability read the catalogue; nothing else needs an edit.
 
 pub mod flow_asymmetry;
 pub mod flow_saturation;
