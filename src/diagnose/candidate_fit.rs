@@ -119,7 +119,7 @@ impl FreeLayout {
 /// A start of a candidate's fit: the free vector ([`FreeLayout`]: the effect's and the
 /// free baseline parameters), and the parameters the other baseline parameters are taken
 /// from.
-pub(super) struct Start {
+struct Start {
     free: Vec<f64>,
     fixed: Params,
 }

@@ -60,7 +60,7 @@ const IMPROVEMENT: f64 = 0.8;
 /// [`OIL_COLUMN_FACTORS`] starts a Nelder-Mead polish of the gap (held within
 /// [`GAP_READ_SPAN`] of the reading), the rod's mass and [`POLISHED`] on the signature
 /// tests' fitting halves; then, as stick-slip's fit does,
-/// the baseline is unbent by output error on the fitting tests `fit_idx` with the play
+/// the baseline is unbent by output error on the fitting tests (`ctx.fit_idx`) with the play
 /// held, and polished again while the score improves. Returns the score, the effect's
 /// parameters and the model.
 pub(super) fn fit_free_play(
