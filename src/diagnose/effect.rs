@@ -80,6 +80,25 @@ impl Effect {
         self.parameters().iter().position(|k| *k == key)
     }
 
+    /// The key among [`Effect::parameters`] of the specimen's newest mode's mass (the mode
+    /// its fit adds), `None` for the other effects.
+    pub(super) fn newest_mode_mass(self) -> Option<&'static str> {
+        match self.specimen_modes()? {
+            1 => Some("mass_kg"),
+            2 => Some("mode2.mass_kg"),
+            _ => Some("mode3.mass_kg"),
+        }
+    }
+
+    /// The value of its parameter `key` in `theta` (its parameters in the order of
+    /// [`Effect::parameters`]), `None` when it has no such parameter.
+    pub(super) fn value_of(self, theta: &[f64], key: &str) -> Option<f64> {
+        self.parameters()
+            .iter()
+            .position(|k| *k == key)
+            .map(|k| theta[k])
+    }
+
     /// The specimen's modes (1 to 3), `None` for the other effects.
     pub fn specimen_modes(self) -> Option<usize> {
         match self {

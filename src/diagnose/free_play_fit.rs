@@ -4,11 +4,11 @@
 use super::baseline::{
     candidate_range, mass_is_scale, refine_output_error, BaselineParameter, Range,
 };
+use super::candidates::FitContext;
 use super::effect::Effect;
 use super::part::Part;
-use super::residuals::{self, NoiseFloor, Whitening};
+use super::residuals;
 use super::stick_slip::{UNBENDING_ITERATIONS, UNBENDING_ROUNDS};
-use crate::campaign::Campaign;
 use crate::params::Params;
 
 /// The baseline parameters polished with the gap and the rod's mass: the oil column,
@@ -60,17 +60,16 @@ const IMPROVEMENT: f64 = 0.8;
 /// [`OIL_COLUMN_FACTORS`] starts a Nelder-Mead polish of the gap (held within
 /// [`GAP_READ_SPAN`] of the reading), the rod's mass and [`POLISHED`] on the signature
 /// tests' fitting halves; then, as stick-slip's fit does,
-/// the baseline is unbent by output error on the fitting tests `fit_idx` with the play
+/// the baseline is unbent by output error on the fitting tests (`ctx.fit_idx`) with the play
 /// held, and polished again while the score improves. Returns the score, the effect's
 /// parameters and the model.
 pub(super) fn fit_free_play(
-    c: &Campaign,
     bases: &[Params],
     sig: &[usize],
-    noise: &NoiseFloor,
     start: &[f64],
-    (fit_idx, whitening): (&[usize], &Whitening),
+    ctx: &FitContext,
 ) -> Option<(f64, Vec<f64>, Params)> {
+    let (c, noise) = (ctx.c, ctx.noise);
     let e = Effect::FreePlay;
     let trace = |what: &str| {
         if super::trace_enabled() {
@@ -168,8 +167,8 @@ pub(super) fn fit_free_play(
             &model(&base, &best.1),
             &[(e, &best.1[..2])],
             &bases[0],
-            fit_idx,
-            whitening,
+            ctx.fit_idx,
+            ctx.whitening,
             UNBENDING_ITERATIONS,
         ) else {
             break;

@@ -44,6 +44,7 @@
 
 mod baseline;
 pub mod calibration;
+mod candidate_fit;
 mod candidates;
 mod direction_starts;
 mod effect;

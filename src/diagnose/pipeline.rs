@@ -4,7 +4,9 @@
 //! cells; then searches for causes, one effect at a time, until none passes.
 
 use super::baseline::{from_motion, refine_output_error};
-use super::candidates::{fit_candidate, heldout_scores, scored_candidate, Fitted, Hold};
+use super::candidates::{
+    fit_candidate, heldout_scores, scored_candidate, FitContext, Fitted, Hold,
+};
 use super::effect::{Effect, EFFECTS};
 use super::effort::Effort;
 use super::missed::Missed;
@@ -192,17 +194,16 @@ impl Diagnoser<'_> {
         missed: &Missed,
         hold: &Hold,
     ) -> Option<Candidate> {
-        let mut cand = fit_candidate(
-            e,
-            self.c,
-            bases,
-            &self.tests,
-            &self.tests,
-            &self.noise,
-            self.effort,
-            &self.whitening,
+        let ctx = FitContext {
+            c: self.c,
+            fit_idx: &self.tests,
+            heldout_idx: &self.tests,
+            noise: &self.noise,
+            effort: self.effort,
+            whitening: &self.whitening,
             hold,
-        )?;
+        };
+        let mut cand = fit_candidate(e, bases, &ctx)?;
         cand.summarise(&|rows| missed.rms(rows), &|rows| {
             self.report_missed.rms(rows)
         });

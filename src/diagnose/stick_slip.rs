@@ -2,11 +2,10 @@
 //! predictive score (its chatter has no reproducible phase).
 
 use super::baseline::refine_output_error;
+use super::candidates::FitContext;
 use super::effect::Effect;
 use super::part::Part;
-use super::residuals::{NoiseFloor, Whitening};
 use super::{residuals, stribeck};
-use crate::campaign::Campaign;
 use crate::params::Params;
 use rayon::prelude::*;
 
@@ -23,13 +22,11 @@ pub(super) type StickSlipEval<'a> = dyn Fn(f64, f64, f64) -> (f64, Vec<f64>, Par
 /// (the refinement had raised the friction and shrunk its yield displacement to absorb
 /// the static peaks) and polishes again while the score improves.
 pub(super) fn fit_stick_slip(
-    c: &Campaign,
     base: &Params,
     sig: &[usize],
-    noise: &NoiseFloor,
-    fit_idx: &[usize],
-    whitening: &Whitening,
+    ctx: &FitContext,
 ) -> Option<(f64, Vec<f64>, Params)> {
+    let (c, noise) = (ctx.c, ctx.noise);
     let e = Effect::StickSlip;
     let eval_on = |base: Params| {
         move |r: f64, v: f64, f_mu: f64| -> (f64, Vec<f64>, Params) {
@@ -57,8 +54,8 @@ pub(super) fn fit_stick_slip(
             &best.2,
             &[(e, &best.1)],
             base,
-            fit_idx,
-            whitening,
+            ctx.fit_idx,
+            ctx.whitening,
             UNBENDING_ITERATIONS,
         ) else {
             break;
