@@ -35,7 +35,6 @@ pub fn write(
     responses: &[CellResponse],
 ) -> Result<(), super::ReportError> {
     super::create_dir(dir)?;
-    let j = d.to_json();
     let cause = if d.causes.is_empty() {
         "none".to_string()
     } else {
@@ -202,7 +201,7 @@ pub fn write(
         d.structure_change()
             .map(|s| format!("<p>Note: {}.</p>", escape_html(&s)))
             .unwrap_or_default(),
-        escape_html(j["rule"].as_str().unwrap_or(""))
+        escape_html(&d.rule())
     );
     let _ = writeln!(
         md,
