@@ -3,8 +3,9 @@
 use super::effect::Effect;
 use super::effort::Effort;
 use super::evidence::EVIDENCE_SIGMAS;
+use super::pipeline::{COHERENT_MAJORITY, MIN_COHERENT_REMOVED, UNRESOLVED_CHANGE};
 use super::residuals::{Cells, NoiseFloor, SCORE_WINDOW};
-use super::specimen_modes::parameters_json;
+use super::specimen_modes::{parameters_json, MODE_SEPARATION};
 use super::visibility::Visibility;
 use super::{EXPLAINED_RATIO, MISS_RATIO, REQUIRED_GAIN};
 use crate::identify::Identification;
@@ -312,32 +313,14 @@ impl Diagnosis {
     pub fn to_json(&self) -> serde_json::Value {
         use serde_json::json;
         let cause = self.cause().map(|e| e.name()).unwrap_or("none");
-        // a specimen of several modes as the parameter file writes it (`modes`)
-        let keyed = |e: Effect, p: &BTreeMap<String, f64>| parameters_json(e, p);
         let parameters = match self.causes.first() {
-            Some(c) => keyed(c.effect, &c.parameters),
+            Some(c) => parameters_json(c.effect, &c.parameters),
             None => json!({}),
-        };
-        // the finite cells: a diverged run's are left out like absent channels
-        let cells = |r: &Cells| -> serde_json::Value {
-            serde_json::Value::Object(
-                r.iter()
-                    .filter_map(|(ch, v)| v.filter(|v| v.is_finite()).map(|v| (ch, v)))
-                    .map(|(ch, v)| (ch.name().to_string(), json!(v)))
-                    .collect(),
-            )
-        };
-        let per_test = |rows: &[Cells]| -> serde_json::Map<String, serde_json::Value> {
-            self.tests
-                .iter()
-                .zip(rows)
-                .map(|(t, r)| (t.clone(), cells(r)))
-                .collect()
         };
         let base: serde_json::Map<String, serde_json::Value> = self
             .baseline_rows
             .iter()
-            .map(|(name, r)| (name.clone(), cells(r)))
+            .map(|(name, r)| (name.clone(), cells_json(r)))
             .collect();
         json!({
             "effort": self.effort.name(),
@@ -345,24 +328,13 @@ impl Diagnosis {
             "cause_rejected": self.cause_rejected,
             "baseline_unscorable": self.baseline_unscorable,
             "parameters": parameters,
-            "causes": self.causes.iter().map(|c| json!({
-                "effect": c.effect.name(),
-                "parameters": keyed(c.effect, &c.parameters),
-                "sigma": c.sigma,
-                "gain": c.gain,
-                "mass_ratios": self.mass_ratios(&c.parameters),
-            })).collect::<Vec<_>>(),
+            "causes": self.causes_json(),
             "mass_scale": {
                 "table_mass_kg": self.extended.table.mass_kg,
                 "convention": self.mass_is_convention(),
                 "rule": "without a force channel the table mass is held at a conventional value (the closed-loop fit's scale) and every mass named is on its scale: only the ratios (mass_ratios: mass over the extended model's table mass) are measured",
             },
-            "partial": self.partial.iter().map(|c| json!({
-                "effect": c.effect.name(),
-                "parameters": keyed(c.effect, &c.parameters),
-                "selection_gain": c.selection_gain,
-                "why_not_a_cause": c.why_not_a_cause,
-            })).collect::<Vec<_>>(),
+            "partial": self.partial_json(),
             "not_testable": self.not_testable,
             "specimen_visibility": self.specimen_visibility,
             "gain": self.gain,
@@ -375,26 +347,13 @@ impl Diagnosis {
             "baseline_heldout_residual": self.baseline_heldout,
             "extended_heldout_residual": self.extended_heldout,
             "baseline_heldout_score": self.baseline_score,
-            "baseline_heldout_residuals": per_test(&self.baseline_report.residual),
-            "baseline_selection_residuals": per_test(&self.baseline_select.residual),
-            "candidates": self.candidates.iter().map(|c| json!({
-                "effect": c.effect.name(),
-                "parameters": keyed(c.effect, &c.parameters),
-                "sigma": c.sigma,
-                "selection_residual": c.select_residual,
-                "selection_deviation": c.select_deviation,
-                "heldout_residual": c.report_residual,
-                "score": c.score,
-                "not_evidence": c.not_evidence,
-            })).collect::<Vec<_>>(),
+            "baseline_heldout_residuals": self.per_test_json(&self.baseline_report.residual),
+            "baseline_selection_residuals": self.per_test_json(&self.baseline_select.residual),
+            "candidates": self.candidates_json(),
             "noise": self.noise,
             "fit_tests": self.tests,
             "heldout_tests": self.tests,
-            "split": {
-                "fit": "first half of every test: every least-squares fit",
-                "select": "third quarter of every test: missed cells, ranking, polishing, actuator variant, acceptance, whether to search again",
-                "report": "last quarter of every test: gain, explained and unexplained only",
-            },
+            "split": split_json(),
             "baseline_from": self.baseline_from(),
             "closed_loop": self.identification.closed_loop,
             "baseline_structure": {
@@ -405,7 +364,143 @@ impl Diagnosis {
                 "servovalve": self.extended.servovalve.model.name(),
                 "actuator": self.extended.actuator.model.name(),
             },
-            "rule": format!("every model is simulated noise-free and with seeded sensor noise at the estimated levels inside the loop; residual (measured - noise-free run) and predicted spread (noisy run with its own sensor noise - noise-free run) are split into octave bands (the lowest from 0 Hz, the highest to Nyquist) and scored per band in windows of {SCORE_WINDOW} samples or more (8 degrees of freedom in the band): score = sqrt(mean over bands of mean(P_meas/P_pred + ln(P_pred/floor^2 share))) (Gaussian log score, a proper scoring rule), residual = sqrt(mean over bands of mean(P_meas/P_pred)) (1 for a model that predicts the data to within its noise), deviation = RMS(measured - noise-free run) / floor (shown per candidate as selection_deviation; it credits no spread, and decides nothing); on a test whose displacement reference was integrated from its recorded acceleration the displacement's lowest band is not scored (the integral's error there is bounded by no recording); missed cells = (test, channel) cells whose residual exceeds {MISS_RATIO}; each search fits every effect not yet accepted on the current model (fit half) and ranks them by RMS score on the cells the current model misses in the selection quarter (1 % penalty per parameter; a specimen is refitted with one mode more, every mode free, up to three, while that divides its score there by >= {REQUIRED_GAIN}, every mode's mass is significant and its modes lie 10 % apart in frequency); the best is a cause when it divides the current score there by >= {REQUIRED_GAIN} times the factor by which chance moves that score (its largest ratio when the table mass changes by 0.1 % either way: 1 for a smooth model, more where free play bounces), is physical and is evidence (no parameter at a bound of its range, its strength parameter more than {EVIDENCE_SIGMAS} sigma from its no-effect value) and, where more than half the residual power on those cells is coherent with the reference (deterministic: no predicted spread holds it), its noise-free run removes at least a tenth of that coherent power; the search repeats with the causes in the model until no candidate passes or no selection cell is missed; a candidate that passes {REQUIRED_GAIN} but not that bar is listed in partial; then, while two causes or more are named, each is taken out of the final model in turn, and the one whose removal raises the selection score least against its bar is dropped (listed in partial) when the model with it would not pass that rule on top of the model without it; gain = baseline residual / extended residual on the baseline's missed cells of the report quarter; explained when every such cell has an extended residual <= {EXPLAINED_RATIO}"),
+            "rule": self.rule(),
         })
+    }
+
+    /// The accepted causes as the JSON lists them (a specimen of several modes as the
+    /// parameter file writes it, `modes`).
+    fn causes_json(&self) -> Vec<serde_json::Value> {
+        self.causes
+            .iter()
+            .map(|c| {
+                serde_json::json!({
+                    "effect": c.effect.name(),
+                    "parameters": parameters_json(c.effect, &c.parameters),
+                    "sigma": c.sigma,
+                    "gain": c.gain,
+                    "mass_ratios": self.mass_ratios(&c.parameters),
+                })
+            })
+            .collect()
+    }
+
+    /// The partial explanations as the JSON lists them.
+    fn partial_json(&self) -> Vec<serde_json::Value> {
+        self.partial
+            .iter()
+            .map(|c| {
+                serde_json::json!({
+                    "effect": c.effect.name(),
+                    "parameters": parameters_json(c.effect, &c.parameters),
+                    "selection_gain": c.selection_gain,
+                    "why_not_a_cause": c.why_not_a_cause,
+                })
+            })
+            .collect()
+    }
+
+    /// The first search's candidates as the JSON lists them.
+    fn candidates_json(&self) -> Vec<serde_json::Value> {
+        self.candidates
+            .iter()
+            .map(|c| {
+                serde_json::json!({
+                    "effect": c.effect.name(),
+                    "parameters": parameters_json(c.effect, &c.parameters),
+                    "sigma": c.sigma,
+                    "selection_residual": c.select_residual,
+                    "selection_deviation": c.select_deviation,
+                    "heldout_residual": c.report_residual,
+                    "score": c.score,
+                    "not_evidence": c.not_evidence,
+                })
+            })
+            .collect()
+    }
+
+    /// `rows` (one per test, campaign order) keyed by test name ([`cells_json`]).
+    fn per_test_json(&self, rows: &[Cells]) -> serde_json::Map<String, serde_json::Value> {
+        self.tests
+            .iter()
+            .zip(rows)
+            .map(|(t, r)| (t.clone(), cells_json(r)))
+            .collect()
+    }
+
+    /// The rule the diagnosis followed, in words (the JSON's `rule`, the report's).
+    pub fn rule(&self) -> String {
+        rule_text()
+    }
+}
+
+/// The rule every diagnosis follows, in words, its numbers read from the constants that
+/// decide.
+fn rule_text() -> String {
+    let mode_apart_percent = 100.0 * (MODE_SEPARATION - 1.0);
+    let unresolved_percent = 100.0 * UNRESOLVED_CHANGE;
+    let majority = share_in_words(COHERENT_MAJORITY);
+    let min_removed = share_in_words(MIN_COHERENT_REMOVED);
+    format!("every model is simulated noise-free and with seeded sensor noise at the estimated levels inside the loop; residual (measured - noise-free run) and predicted spread (noisy run with its own sensor noise - noise-free run) are split into octave bands (the lowest from 0 Hz, the highest to Nyquist) and scored per band in windows of {SCORE_WINDOW} samples or more (8 degrees of freedom in the band): score = sqrt(mean over bands of mean(P_meas/P_pred + ln(P_pred/floor^2 share))) (Gaussian log score, a proper scoring rule), residual = sqrt(mean over bands of mean(P_meas/P_pred)) (1 for a model that predicts the data to within its noise), deviation = RMS(measured - noise-free run) / floor (shown per candidate as selection_deviation; it credits no spread, and decides nothing); on a test whose displacement reference was integrated from its recorded acceleration the displacement's lowest band is not scored (the integral's error there is bounded by no recording); missed cells = (test, channel) cells whose residual exceeds {MISS_RATIO}; each search fits every effect not yet accepted on the current model (fit half) and ranks them by RMS score on the cells the current model misses in the selection quarter (1 % penalty per parameter; a specimen is refitted with one mode more, every mode free, up to three, while that divides its score there by >= {REQUIRED_GAIN}, every mode's mass is significant and its modes lie {mode_apart_percent:.0} % apart in frequency); the best is a cause when it divides the current score there by >= {REQUIRED_GAIN} times the factor by which chance moves that score (its largest ratio when the table mass changes by {unresolved_percent} % either way: 1 for a smooth model, more where free play bounces), is physical and is evidence (no parameter at a bound of its range, its strength parameter more than {EVIDENCE_SIGMAS} sigma from its no-effect value) and, where more than {majority} the residual power on those cells is coherent with the reference (deterministic: no predicted spread holds it), its noise-free run removes at least {min_removed} of that coherent power; the search repeats with the causes in the model until no candidate passes or no selection cell is missed; a candidate that passes {REQUIRED_GAIN} but not that bar is listed in partial; then, while two causes or more are named, each is taken out of the final model in turn, and the one whose removal raises the selection score least against its bar is dropped (listed in partial) when the model with it would not pass that rule on top of the model without it; gain = baseline residual / extended residual on the baseline's missed cells of the report quarter; explained when every such cell has an extended residual <= {EXPLAINED_RATIO}")
+}
+
+/// What each part of every test is used for ([`super::Part`]).
+fn split_json() -> serde_json::Value {
+    serde_json::json!({
+        "fit": "first half of every test: every least-squares fit",
+        "select": "third quarter of every test: missed cells, ranking, polishing, actuator variant, acceptance, whether to search again",
+        "report": "last quarter of every test: gain, explained and unexplained only",
+    })
+}
+
+/// The finite cells of `r` keyed by channel name: a diverged run's are left out like
+/// absent channels.
+fn cells_json(r: &Cells) -> serde_json::Value {
+    serde_json::Value::Object(
+        r.iter()
+            .filter_map(|(ch, v)| v.filter(|v| v.is_finite()).map(|v| (ch, v)))
+            .map(|(ch, v)| (ch.name().to_string(), serde_json::json!(v)))
+            .collect(),
+    )
+}
+
+/// A share in words as the rule's text says it ("half", "a tenth"), a percentage when it
+/// is no simple fraction.
+fn share_in_words(share: f64) -> String {
+    const WORDS: [(f64, &str); 4] = [
+        (0.5, "half"),
+        (0.25, "a quarter"),
+        (0.2, "a fifth"),
+        (0.1, "a tenth"),
+    ];
+    WORDS
+        .iter()
+        .find(|(x, _)| *x == share)
+        .map_or_else(|| format!("{:.0} %", 100.0 * share), |(_, w)| w.to_string())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::{rule_text, share_in_words};
+
+    #[test]
+    fn simple_shares_are_said_in_words() {
+        assert_eq!(share_in_words(0.5), "half");
+        assert_eq!(share_in_words(0.1), "a tenth");
+        assert_eq!(share_in_words(0.15), "15 %");
+    }
+
+    /// The numbers the rule's text reads from the constants, as it has always printed them.
+    #[test]
+    fn the_rule_says_its_numbers_as_before() {
+        let rule = rule_text();
+        for said in [
+            "its modes lie 10 % apart in frequency",
+            "the table mass changes by 0.1 % either way",
+            "where more than half the residual power",
+            "removes at least a tenth of that coherent power",
+        ] {
+            assert!(rule.contains(said), "{said}");
+        }
     }
 }

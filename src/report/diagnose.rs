@@ -5,7 +5,7 @@
 
 use crate::campaign::Campaign;
 use crate::diagnose::{padded, simulate_test, CellResponse, Channel, Diagnosis, Part};
-use crate::identify::frf::{Welch, WelchOptions};
+use crate::identify::frf::{FrfEstimate, Welch, WelchOptions};
 use crate::report::page::{html_table, markdown_cell, markdown_table, Table};
 use crate::report::plot::{bode_png, xy_png, BodeCurve, Series};
 use crate::report::{escape_html, markdown_code, safe_file_name};
@@ -23,6 +23,9 @@ fn heat(x: Option<f64>) -> String {
     format!("rgb(255,{g},{g})")
 }
 
+/// A figure of the report: its title and its file's name in the report's folder.
+type Figure = (String, String);
+
 /// Write index.html, README.md and the figures into `dir`; `responses` are the worst
 /// unexplained cells' model-error responses
 /// ([`crate::diagnose::unexplained_responses`] with
@@ -35,8 +38,33 @@ pub fn write(
     responses: &[CellResponse],
 ) -> Result<(), super::ReportError> {
     super::create_dir(dir)?;
-    let j = d.to_json();
-    let cause = if d.causes.is_empty() {
+    let cause = cause_names(d);
+    let mut figures = worst_time_figures(dir, c, d, &cause)?;
+    figures.extend(table_tf_figure(dir, c, d, &cause)?);
+    // pages
+    let mut html = String::from(
+        "<!DOCTYPE html><html><head><meta charset=\"utf-8\"><title>Diagnosis</title><style>\
+         body{font-family:sans-serif;max-width:1100px;margin:auto}table{border-collapse:collapse}\
+         td,th{border:1px solid #ccc;padding:3px 8px;text-align:right}td:first-child{text-align:left}\
+         img{max-width:100%}</style></head><body>",
+    );
+    let mut md = String::new();
+    write_summary(&mut html, &mut md, c, d, &cause);
+    write_heat_map(&mut html, &mut md, d);
+    super::diagnose_causes::write_causes(&mut html, &mut md, d);
+    write_fits(&mut html, &mut md, d);
+    super::diagnose_model_error::write_model_error(dir, responses, &mut html, &mut md)?;
+    write_candidates(&mut html, &mut md, d);
+    write_figures(&mut html, &mut md, &figures);
+    html.push_str("</body></html>\n");
+    crate::output::atomic_write(&dir.join("index.html"), html.as_bytes())?;
+    crate::output::atomic_write(&dir.join("README.md"), md.as_bytes())?;
+    Ok(())
+}
+
+/// The causes named, joined by " + " ("none" without one).
+fn cause_names(d: &Diagnosis) -> String {
+    if d.causes.is_empty() {
         "none".to_string()
     } else {
         d.causes
@@ -44,8 +72,18 @@ pub fn write(
             .map(|c| c.effect.name())
             .collect::<Vec<_>>()
             .join(" + ")
-    };
-    let mut figures: Vec<(String, String)> = Vec::new();
+    }
+}
+
+/// The overlays of the baseline's worst cells (three tests at most, one cell each, the
+/// largest residual ratio first): measured, baseline and extended (`cause`).
+fn worst_time_figures(
+    dir: &Path,
+    c: &Campaign,
+    d: &Diagnosis,
+    cause: &str,
+) -> Result<Vec<Figure>, super::ReportError> {
+    let mut figures = Vec::new();
     // the worst tests of the baseline: the largest residual ratio
     let mut worst: Vec<(usize, Channel, f64)> = d
         .baseline_rows
@@ -61,125 +99,166 @@ pub fn write(
             continue;
         }
         shown.push((i, ch));
-        let r = &c.records[i];
-        let (base, ext) = (
-            simulate_test(&d.baseline, c, i, Part::Whole),
-            simulate_test(&d.extended, c, i, Part::Whole),
-        );
-        // every sample, NaN from a stop on (the plot leaves a gap there)
-        let (base, ext) = (padded(&base), padded(&ext));
-        let Some(m) = ch.measured(r) else {
-            continue;
-        };
-        // a 1.5 s window around the largest baseline residual
-        let k = (0..m.len())
-            .max_by(|&a, &b| {
-                (m[a] - ch.simulated(&base[a]))
-                    .abs()
-                    .total_cmp(&(m[b] - ch.simulated(&base[b])).abs())
-            })
-            .unwrap_or(0);
-        let half = (0.75 * c.sample_rate_of(i)) as usize;
-        let (lo, hi) = (k.saturating_sub(half), (k + half).min(m.len()));
-        let t: Vec<f64> = r.time_s[lo..hi].to_vec();
-        let meas: Vec<f64> = m[lo..hi].to_vec();
-        let b: Vec<f64> = base[lo..hi].iter().map(|o| ch.simulated(o)).collect();
-        let e: Vec<f64> = ext[lo..hi].iter().map(|o| ch.simulated(o)).collect();
-        let name = &c.info.tests[i].name;
-        let file = safe_file_name(&format!("time_{name}_{}.png", ch.name()));
-        let ext_label = format!("extended ({cause})");
-        xy_png(
-            &dir.join(&file),
-            &format!(
-                "{name}: {} (baseline residual {ratio:.1} x noise)",
-                ch.name()
-            ),
-            "time (s)",
-            ch.name(),
-            &[
-                Series {
-                    label: "measured",
-                    x: &t,
-                    y: &meas,
-                    points: false,
-                },
-                Series {
-                    label: "baseline",
-                    x: &t,
-                    y: &b,
-                    points: false,
-                },
-                Series {
-                    label: &ext_label,
-                    x: &t,
-                    y: &e,
-                    points: false,
-                },
-            ],
-        )?;
-        figures.push((
-            format!("{name}, {}: measured vs baseline vs extended", ch.name()),
-            file,
-        ));
+        figures.extend(time_figure(dir, c, d, (i, ch, ratio), cause)?);
     }
-    // the table TF of the mass test (R2 in the paper; identify::select): measured,
-    // baseline, extended
-    let roles = crate::identify::select::random_roles(c);
-    if let Some(i) = roles.mass.or(roles.oil_column) {
-        let r = &c.records[i];
-        let fs = c.sample_rate_of(i);
-        if let Ok(w) = Welch::new(
-            fs,
-            WelchOptions::for_resolution(fs, 0.25).fit_to(r.len(), 8),
-        ) {
-            let est = |acc: &[f64]| w.frf(&r.ref_acceleration_m_s2, acc).ok();
-            let acceleration = |p| -> Vec<f64> {
-                let run = simulate_test(p, c, i, Part::Whole);
-                padded(&run).iter().map(|o| o.acceleration_m_s2).collect()
-            };
-            let (base, ext) = (acceleration(&d.baseline), acceleration(&d.extended));
-            let measured = r.acceleration_m_s2.as_deref().and_then(est);
-            if let (Some(m), Some(b), Some(e)) = (measured, est(&base), est(&ext)) {
-                let ext_label = format!("extended ({cause})");
-                bode_png(
-                    &dir.join("table_tf.png"),
-                    &format!(
-                        "Table TF of {}: measured, baseline, extended",
-                        c.info.tests[i].name
-                    ),
-                    "gain (-)",
-                    &[
-                        BodeCurve {
-                            label: "measured",
-                            frequency_hz: &m.frequency_hz,
-                            response: &m.h1,
-                        },
-                        BodeCurve {
-                            label: "baseline",
-                            frequency_hz: &b.frequency_hz,
-                            response: &b.h1,
-                        },
-                        BodeCurve {
-                            label: &ext_label,
-                            frequency_hz: &e.frequency_hz,
-                            response: &e.h1,
-                        },
-                    ],
-                    1.0,
-                    40.0,
-                )?;
-                figures.push(("Table TF before and after".into(), "table_tf.png".into()));
-            }
-        }
-    }
-    // pages
-    let mut html = String::from(
-        "<!DOCTYPE html><html><head><meta charset=\"utf-8\"><title>Diagnosis</title><style>\
-         body{font-family:sans-serif;max-width:1100px;margin:auto}table{border-collapse:collapse}\
-         td,th{border:1px solid #ccc;padding:3px 8px;text-align:right}td:first-child{text-align:left}\
-         img{max-width:100%}</style></head><body>",
+    Ok(figures)
+}
+
+/// The overlay of test `i`'s channel `ch` (baseline residual `ratio`) in a 1.5 s window
+/// around the baseline's largest residual; `None` when the channel was not recorded.
+fn time_figure(
+    dir: &Path,
+    c: &Campaign,
+    d: &Diagnosis,
+    (i, ch, ratio): (usize, Channel, f64),
+    cause: &str,
+) -> Result<Option<Figure>, super::ReportError> {
+    let r = &c.records[i];
+    let (base, ext) = (
+        simulate_test(&d.baseline, c, i, Part::Whole),
+        simulate_test(&d.extended, c, i, Part::Whole),
     );
-    let mut md = String::new();
+    // every sample, NaN from a stop on (the plot leaves a gap there)
+    let (base, ext) = (padded(&base), padded(&ext));
+    let Some(m) = ch.measured(r) else {
+        return Ok(None);
+    };
+    let (lo, hi) = worst_window(m, &base, ch, c.sample_rate_of(i));
+    let t: Vec<f64> = r.time_s[lo..hi].to_vec();
+    let meas: Vec<f64> = m[lo..hi].to_vec();
+    let b: Vec<f64> = base[lo..hi].iter().map(|o| ch.simulated(o)).collect();
+    let e: Vec<f64> = ext[lo..hi].iter().map(|o| ch.simulated(o)).collect();
+    let name = &c.info.tests[i].name;
+    let file = safe_file_name(&format!("time_{name}_{}.png", ch.name()));
+    let ext_label = format!("extended ({cause})");
+    xy_png(
+        &dir.join(&file),
+        &format!(
+            "{name}: {} (baseline residual {ratio:.1} x noise)",
+            ch.name()
+        ),
+        "time (s)",
+        ch.name(),
+        &[
+            Series {
+                label: "measured",
+                x: &t,
+                y: &meas,
+                points: false,
+            },
+            Series {
+                label: "baseline",
+                x: &t,
+                y: &b,
+                points: false,
+            },
+            Series {
+                label: &ext_label,
+                x: &t,
+                y: &e,
+                points: false,
+            },
+        ],
+    )?;
+    Ok(Some((
+        format!("{name}, {}: measured vs baseline vs extended", ch.name()),
+        file,
+    )))
+}
+
+/// The samples `lo..hi` of a 1.5 s window (at `sample_rate_hz`) around the largest
+/// residual of the baseline's run `base` against the measured channel `m`.
+fn worst_window(
+    m: &[f64],
+    base: &[crate::Outputs],
+    ch: Channel,
+    sample_rate_hz: f64,
+) -> (usize, usize) {
+    let k = (0..m.len())
+        .max_by(|&a, &b| {
+            (m[a] - ch.simulated(&base[a]))
+                .abs()
+                .total_cmp(&(m[b] - ch.simulated(&base[b])).abs())
+        })
+        .unwrap_or(0);
+    let half = (0.75 * sample_rate_hz) as usize;
+    (k.saturating_sub(half), (k + half).min(m.len()))
+}
+
+/// The table TF of the mass test (R2 in the paper; identify::select): measured, baseline,
+/// extended; `None` without such a test or an estimate of all three.
+fn table_tf_figure(
+    dir: &Path,
+    c: &Campaign,
+    d: &Diagnosis,
+    cause: &str,
+) -> Result<Option<Figure>, super::ReportError> {
+    let roles = crate::identify::select::random_roles(c);
+    let Some(i) = roles.mass.or(roles.oil_column) else {
+        return Ok(None);
+    };
+    let Some([m, b, e]) = table_tfs(c, d, i) else {
+        return Ok(None);
+    };
+    let ext_label = format!("extended ({cause})");
+    bode_png(
+        &dir.join("table_tf.png"),
+        &format!(
+            "Table TF of {}: measured, baseline, extended",
+            c.info.tests[i].name
+        ),
+        "gain (-)",
+        &[
+            BodeCurve {
+                label: "measured",
+                frequency_hz: &m.frequency_hz,
+                response: &m.h1,
+            },
+            BodeCurve {
+                label: "baseline",
+                frequency_hz: &b.frequency_hz,
+                response: &b.h1,
+            },
+            BodeCurve {
+                label: &ext_label,
+                frequency_hz: &e.frequency_hz,
+                response: &e.h1,
+            },
+        ],
+        1.0,
+        40.0,
+    )?;
+    Ok(Some((
+        "Table TF before and after".into(),
+        "table_tf.png".into(),
+    )))
+}
+
+/// Test `i`'s table TF (acceleration over reference acceleration, Welch at 0.25 Hz):
+/// measured, of the baseline, of the extended model; `None` unless all three estimate.
+fn table_tfs(c: &Campaign, d: &Diagnosis, i: usize) -> Option<[FrfEstimate; 3]> {
+    let r = &c.records[i];
+    let fs = c.sample_rate_of(i);
+    let w = Welch::new(
+        fs,
+        WelchOptions::for_resolution(fs, 0.25).fit_to(r.len(), 8),
+    )
+    .ok()?;
+    let est = |acc: &[f64]| w.frf(&r.ref_acceleration_m_s2, acc).ok();
+    let acceleration = |p| -> Vec<f64> {
+        let run = simulate_test(p, c, i, Part::Whole);
+        padded(&run).iter().map(|o| o.acceleration_m_s2).collect()
+    };
+    let (base, ext) = (acceleration(&d.baseline), acceleration(&d.extended));
+    let measured = r.acceleration_m_s2.as_deref().and_then(est);
+    let (Some(m), Some(b), Some(e)) = (measured, est(&base), est(&ext)) else {
+        return None;
+    };
+    Some([m, b, e])
+}
+
+/// The summary: the causes, the gain, the baseline's structure and noise floor, the rule.
+fn write_summary(html: &mut String, md: &mut String, c: &Campaign, d: &Diagnosis, cause: &str) {
     let _ = write!(
         html,
         "<h1>Diagnosis of {}</h1><p><b>Cause: {cause}</b>, gain {:.2} on the report quarter (data no fit or decision saw), explained: {}.</p>\
@@ -202,7 +281,7 @@ pub fn write(
         d.structure_change()
             .map(|s| format!("<p>Note: {}.</p>", escape_html(&s)))
             .unwrap_or_default(),
-        escape_html(j["rule"].as_str().unwrap_or(""))
+        escape_html(&d.rule())
     );
     let _ = writeln!(
         md,
@@ -214,6 +293,10 @@ pub fn write(
     if let Some(s) = d.structure_change() {
         let _ = writeln!(md, "Note: {s}.\n");
     }
+}
+
+/// The heat map: the baseline's residual over the noise floor per test and channel.
+fn write_heat_map(html: &mut String, md: &mut String, d: &Diagnosis) {
     html.push_str(
         "<h2>What the baseline gets wrong: residual RMS / noise RMS</h2><table><tr><th>test</th>",
     );
@@ -238,9 +321,10 @@ pub fn write(
         md.push('\n');
     }
     html.push_str("</table>");
-    super::diagnose_causes::write_causes(&mut html, &mut md, d);
-    write_fits(&mut html, &mut md, d);
-    super::diagnose_model_error::write_model_error(dir, responses, &mut html, &mut md)?;
+}
+
+/// The first search's candidates with their report residual and selection score.
+fn write_candidates(html: &mut String, md: &mut String, d: &Diagnosis) {
     html.push_str("<h2>Candidates of the first search</h2><table><tr><th>effect</th><th>parameters</th><th>report residual</th><th>selection score</th></tr>");
     md.push_str("\n## Candidates of the first search\n\n| effect | parameters | report residual | selection score |\n|---|---|---|---|\n");
     let _ = write!(
@@ -271,9 +355,14 @@ pub fn write(
             cand.score
         );
     }
-    html.push_str("</table><h2>Before and after</h2>");
+    html.push_str("</table>");
+}
+
+/// The overlays, each under its title.
+fn write_figures(html: &mut String, md: &mut String, figures: &[Figure]) {
+    html.push_str("<h2>Before and after</h2>");
     md.push_str("\n## Before and after\n\n");
-    for (title, file) in &figures {
+    for (title, file) in figures {
         let _ = write!(
             html,
             "<h3>{}</h3><img src=\"{}\">",
@@ -282,10 +371,6 @@ pub fn write(
         );
         let _ = write!(md, "### {title}\n\n![{title}]({file})\n\n");
     }
-    html.push_str("</body></html>\n");
-    crate::output::atomic_write(&dir.join("index.html"), html.as_bytes())?;
-    crate::output::atomic_write(&dir.join("README.md"), md.as_bytes())?;
-    Ok(())
 }
 
 /// The fits of the baseline and the extended model on the report quarters (NRMSE and

@@ -21,6 +21,33 @@ struct Without {
     chance: f64,
 }
 
+impl Without {
+    /// How far the cause clears its bar: the gain over what chance moves the score by (the
+    /// least is the one the others make most nearly unneeded).
+    fn margin(&self) -> f64 {
+        self.gain / self.chance
+    }
+
+    /// Whether the model with the cause passes the forward rule on top of the model
+    /// without it: divides its score by [`REQUIRED_GAIN`] times what chance moves it by.
+    fn needed(&self) -> bool {
+        self.gain >= REQUIRED_GAIN * self.chance
+    }
+
+    /// Why the cause is not needed once the `others` are in the model.
+    fn why_not_needed(&self, others: &[&str]) -> String {
+        format!(
+            "not needed once {} {} in the model: taking it out of the final model \
+             raises the selection score by a factor {:.3} only, below \
+             {REQUIRED_GAIN} times the factor {:.3} by which chance moves it",
+            others.join(" and "),
+            if others.len() == 1 { "is" } else { "are" },
+            self.gain,
+            self.chance
+        )
+    }
+}
+
 impl Diagnoser<'_> {
     /// While two causes or more are named: each taken out of the final model `current` in
     /// turn (the others and every refined parameter kept); the one whose removal raises
@@ -45,7 +72,7 @@ impl Diagnoser<'_> {
                 .into_par_iter()
                 .map(|k| self.without(causes, k, current))
                 .filter(|w| w.gain.is_finite())
-                .min_by(|a, b| (a.gain / a.chance).total_cmp(&(b.gain / b.chance)));
+                .min_by(|a, b| a.margin().total_cmp(&b.margin()));
             let Some(w) = weakest else { break };
             if trace_enabled() {
                 eprintln!(
@@ -55,7 +82,7 @@ impl Diagnoser<'_> {
                     w.chance
                 );
             }
-            if w.gain >= REQUIRED_GAIN * w.chance {
+            if w.needed() {
                 break;
             }
             let cause = causes.remove(w.k);
@@ -64,15 +91,7 @@ impl Diagnoser<'_> {
                 effect: cause.effect,
                 parameters: cause.parameters,
                 selection_gain: w.gain,
-                why_not_a_cause: format!(
-                    "not needed once {} {} in the model: taking it out of the final model \
-                     raises the selection score by a factor {:.3} only, below \
-                     {REQUIRED_GAIN} times the factor {:.3} by which chance moves it",
-                    others.join(" and "),
-                    if others.len() == 1 { "is" } else { "are" },
-                    w.gain,
-                    w.chance
-                ),
+                why_not_a_cause: w.why_not_needed(&others),
             });
             *current = w.model;
             dropped = true;
@@ -130,5 +149,54 @@ impl Diagnoser<'_> {
         for (k, cause) in causes.iter_mut().enumerate() {
             cause.gain = residuals[k] / residuals[k + 1];
         }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::diagnose::output::PartRows;
+    use crate::params::Params;
+
+    fn without(gain: f64, chance: f64) -> Without {
+        let model = Current {
+            params: Params::default(),
+            section4: Params::default(),
+            select: PartRows::default(),
+            report: PartRows::default(),
+        };
+        Without {
+            k: 0,
+            model,
+            gain,
+            chance,
+        }
+    }
+
+    /// A cause stays when taking it out raises the score past the forward rule's bar,
+    /// chance included; the weakest is the one with the least margin over chance.
+    #[test]
+    fn a_cause_is_needed_past_the_forward_rule() {
+        assert!(without(REQUIRED_GAIN, 1.0).needed());
+        assert!(!without(REQUIRED_GAIN * 0.99, 1.0).needed());
+        assert!(!without(1.3 * REQUIRED_GAIN * 0.99, 1.3).needed());
+        assert!(without(2.0, 1.5).margin() < without(1.5, 1.0).margin());
+    }
+
+    /// The reason names the causes that make it unneeded, with the verb they agree with.
+    #[test]
+    fn the_reason_names_the_other_causes() {
+        let w = without(1.1, 1.02);
+        let one = w.why_not_needed(&["specimen"]);
+        assert!(
+            one.starts_with("not needed once specimen is in the model"),
+            "{one}"
+        );
+        assert!(one.contains("by a factor 1.100 only"), "{one}");
+        let two = w.why_not_needed(&["specimen", "free_play"]);
+        assert!(
+            two.starts_with("not needed once specimen and free_play are"),
+            "{two}"
+        );
     }
 }

@@ -1,21 +1,23 @@
 //! One diagnosis from end to end ([`diagnose_with`]): the baseline set up and refined,
 //! the searches for causes until none passes, and the result assembled.
 
-use super::{spread_credited, verdict, CoherentSplit, Current, Diagnoser, Verdict};
+use super::select::{verdict, Verdict};
+use super::{Current, Diagnoser};
 use super::{MAX_CAUSES, PROGRESS_SETUP, SEARCH_STEPS};
 use crate::campaign::{Campaign, Record};
 use crate::diagnose::baseline::{force_recorded, mass_is_scale};
-use crate::diagnose::calibration::SensorNumber;
+use crate::diagnose::calibration::{SensorFinding, SensorNumber};
 use crate::diagnose::candidates::heldout_scores;
 use crate::diagnose::effect::{Effect, EFFECTS};
 use crate::diagnose::effort::Effort;
+use crate::diagnose::kinematics::KinematicCheck;
 use crate::diagnose::locate::{findings, unexplained_cells};
 use crate::diagnose::missed::Missed;
-use crate::diagnose::output::{Candidate, Cause, Diagnosis, Partial};
+use crate::diagnose::output::{Candidate, Cause, Diagnosis, PartRows, Partial, UnexplainedCell};
 use crate::diagnose::part::Part;
 use crate::diagnose::residuals::{estimate_noise, simulate_test, Cells, Whitening};
-use crate::diagnose::visibility::specimen_visibility;
-use crate::diagnose::{unphysical, Progress};
+use crate::diagnose::visibility::{specimen_visibility, Visibility};
+use crate::diagnose::{trace_enabled, unphysical, Progress};
 use crate::identify::spool::refine_servovalve;
 use crate::identify::Identification;
 use crate::params::{Params, Servovalve};
@@ -29,6 +31,45 @@ struct Found {
     first_candidates: Vec<Candidate>,
     cause_rejected: Option<String>,
     current: Current,
+}
+
+impl Found {
+    /// No search: `current` as it is.
+    fn nothing(current: Current) -> Found {
+        Found {
+            causes: Vec::new(),
+            partial: Vec::new(),
+            first_candidates: Vec::new(),
+            cause_rejected: None,
+            current,
+        }
+    }
+}
+
+/// The refined baseline (step 1) and its figures: the heat map's rows, its rows on the
+/// selection and report quarters, its report residual and selection score on the cells
+/// it misses there, and why it cannot be scored, if it cannot.
+struct Baseline {
+    params: Params,
+    /// Output-error cost with the ideal and the nonlinear actuator.
+    actuator_costs: [f64; 2],
+    rows: Vec<(String, Cells)>,
+    select: PartRows,
+    report: PartRows,
+    heldout: f64,
+    score: f64,
+    unscorable: Option<String>,
+}
+
+/// What the final model leaves on the report quarter: its residual on the baseline's
+/// missed cells, whether it explains them all, the cells it still misses (located), the
+/// sensor numbers that remove them and the data-only check of the motion sensors.
+struct Remaining {
+    extended_heldout: f64,
+    explained: bool,
+    unexplained: Vec<UnexplainedCell>,
+    sensor_findings: Vec<SensorFinding>,
+    kinematics: Option<KinematicCheck>,
 }
 
 /// Diagnose the screened campaign `c` from its baseline identification `id`.
@@ -47,100 +88,147 @@ pub(in crate::diagnose) fn diagnose_with(
         PROGRESS_SETUP + SEARCH_STEPS,
         "refining the baseline by output error",
     );
-    let (base, actuator_costs) = d.refine_both_variants(d.table);
-    d.table = base;
-    let baseline_rows = d.baseline_rows(&base);
-    let (baseline_select, baseline_report) = heldout_scores(&base, c, &d.tests, &d.noise, None);
-    d.report_missed = Missed::of(&baseline_report.residual);
-    let baseline_heldout = d.report_missed.rms(&baseline_report.residual);
-    let baseline_score = Missed::of(&baseline_select.residual).rms(&baseline_select.score);
+    let baseline = d.refined_baseline();
     // candidates start from the section-4 estimates too (the output-error baseline has
     // bent its parameters to absorb the missing effect) with the chosen actuator and the
     // valve fitted on the spool (the refinement may have bent its dynamics too)
     let mut section4 = id.params;
-    section4.actuator.model = base.actuator.model;
+    section4.actuator.model = baseline.params.actuator.model;
     section4.servovalve = spool_valve;
     let start = Current {
-        params: base,
+        params: baseline.params,
         section4,
-        select: baseline_select.clone(),
-        report: baseline_report.clone(),
+        select: baseline.select.clone(),
+        report: baseline.report.clone(),
     };
-    let baseline_unscorable = unscorable(&base, c, &baseline_select.residual);
-    let found = match &baseline_unscorable {
+    let found = match &baseline.unscorable {
         // a candidate measured against a baseline with no score would claim an infinite
         // gain (the UTFSM actuator's closed-loop fit, whose every run diverged at the
         // diagnosis' sub-step, had stick-slip named with gain inf)
-        Some(_) => Found {
-            causes: Vec::new(),
-            partial: Vec::new(),
-            first_candidates: Vec::new(),
-            cause_rejected: None,
-            current: start,
-        },
+        Some(_) => Found::nothing(start),
         None => d.search_causes(start),
     };
-    let current = found.current;
-    let extended = current.params;
-    let extended_heldout = d.report_missed.rms(&current.report.residual);
-    let explained = d.report_missed.all_explained_by(&current.report.residual);
-    let unexplained = if explained {
-        Vec::new()
-    } else {
-        unexplained_cells(
-            &extended,
-            c,
-            &current.report,
-            &d.report_missed.cells,
-            &d.noise,
-        )
-    };
-    let kinematics = crate::diagnose::kinematics::check(c);
-    let mut sensor_findings = findings(c, &unexplained);
-    if kinematics.as_ref().is_some_and(|k| k.skewed()) {
-        // the refined model's timing bent to the skew between the two motion sensors: a
-        // delay read against it names the wrong channel (a 3-ms accelerometer lag made
-        // the untouched force seem 1.3 ms early); the data-only check names the pair
-        sensor_findings.retain(|f| f.kind != SensorNumber::Delay);
+    d.conclude(id, baseline, found, not_testable)
+}
+
+impl Diagnoser<'_> {
+    /// Step 1 and 2: the baseline refined with both actuator variants (this diagnoser's
+    /// table becomes it, and the report cells it misses are this diagnoser's), and its
+    /// figures.
+    fn refined_baseline(&mut self) -> Baseline {
+        let c = self.c;
+        let (base, actuator_costs) = self.refine_both_variants(self.table);
+        self.table = base;
+        let rows = self.baseline_rows(&base);
+        let (select, report) = heldout_scores(&base, c, &self.tests, &self.noise, None);
+        self.report_missed = Missed::of(&report.residual);
+        let heldout = self.report_missed.rms(&report.residual);
+        let score = Missed::of(&select.residual).rms(&select.score);
+        let unscorable = unscorable(&base, c, &select.residual);
+        Baseline {
+            params: base,
+            actuator_costs,
+            rows,
+            select,
+            report,
+            heldout,
+            score,
+            unscorable,
+        }
     }
-    let specimen_visibility = (!force_recorded(c)
-        && d.testable.contains(&Effect::Specimen)
-        && !found
-            .causes
-            .iter()
-            .any(|k| k.effect.specimen_modes().is_some()))
-    .then(|| specimen_visibility(&extended, c, &d.whitening))
-    .flatten();
-    let fits = super::super::fits::report_quarter_fits(&base, &extended, c);
-    Diagnosis {
-        fits,
-        baseline: base,
-        baseline_rows,
-        baseline_select,
-        baseline_report,
-        baseline_heldout,
-        baseline_score,
-        candidates: found.first_candidates,
-        causes: found.causes,
-        partial: found.partial,
-        not_testable,
-        specimen_visibility,
-        cause_rejected: found.cause_rejected,
-        baseline_unscorable,
-        explained,
-        gain: baseline_heldout / extended_heldout,
-        extended_heldout,
-        extended,
-        unexplained,
-        sensor_findings,
-        kinematics,
-        tests: c.info.tests.iter().map(|t| t.name.clone()).collect(),
-        valve_model: id.params.servovalve.model,
-        actuator_model: base.actuator.model,
-        actuator_costs,
-        effort,
-        noise: d.noise,
-        identification: id,
+
+    /// The final model `current` on the report quarter: what it leaves of the cells the
+    /// baseline misses, located.
+    fn remaining(&self, current: &Current) -> Remaining {
+        let c = self.c;
+        let extended_heldout = self.report_missed.rms(&current.report.residual);
+        let explained = self
+            .report_missed
+            .all_explained_by(&current.report.residual);
+        let unexplained = if explained {
+            Vec::new()
+        } else {
+            unexplained_cells(
+                &current.params,
+                c,
+                &current.report,
+                &self.report_missed.cells,
+                &self.noise,
+            )
+        };
+        let kinematics = crate::diagnose::kinematics::check(c);
+        let mut sensor_findings = findings(c, &unexplained);
+        if kinematics.as_ref().is_some_and(|k| k.skewed()) {
+            // the refined model's timing bent to the skew between the two motion sensors:
+            // a delay read against it names the wrong channel (a 3-ms accelerometer lag
+            // made the untouched force seem 1.3 ms early); the data-only check names the
+            // pair
+            sensor_findings.retain(|f| f.kind != SensorNumber::Delay);
+        }
+        Remaining {
+            extended_heldout,
+            explained,
+            unexplained,
+            sensor_findings,
+            kinematics,
+        }
+    }
+
+    /// Without a force channel and no specimen among `causes`: the lightest specimen the
+    /// records would have shown under the final model `extended` (step 7).
+    fn unseen_specimen(&self, causes: &[Cause], extended: &Params) -> Option<Visibility> {
+        (!force_recorded(self.c)
+            && self.testable.contains(&Effect::Specimen)
+            && !causes.iter().any(|k| k.effect.specimen_modes().is_some()))
+        .then(|| specimen_visibility(extended, self.c, &self.whitening))
+        .flatten()
+    }
+
+    /// The diagnosis from the identification `id`, the refined `baseline`, what the
+    /// searches `found`, and why the effects `not_testable` are not.
+    fn conclude(
+        self,
+        id: Identification,
+        baseline: Baseline,
+        found: Found,
+        not_testable: Vec<String>,
+    ) -> Diagnosis {
+        let c = self.c;
+        let base = baseline.params;
+        let extended = found.current.params;
+        let remaining = self.remaining(&found.current);
+        let specimen_visibility = self.unseen_specimen(&found.causes, &extended);
+        let fits = crate::diagnose::fits::report_quarter_fits(&base, &extended, c);
+        Diagnosis {
+            fits,
+            baseline: base,
+            baseline_rows: baseline.rows,
+            baseline_select: baseline.select,
+            baseline_report: baseline.report,
+            baseline_heldout: baseline.heldout,
+            baseline_score: baseline.score,
+            candidates: found.first_candidates,
+            causes: found.causes,
+            partial: found.partial,
+            not_testable,
+            specimen_visibility,
+            cause_rejected: found.cause_rejected,
+            baseline_unscorable: baseline.unscorable,
+            explained: remaining.explained,
+            gain: baseline.heldout / remaining.extended_heldout,
+            extended_heldout: remaining.extended_heldout,
+            extended,
+            unexplained: remaining.unexplained,
+            sensor_findings: remaining.sensor_findings,
+            kinematics: remaining.kinematics,
+            tests: c.info.tests.iter().map(|t| t.name.clone()).collect(),
+            valve_model: id.params.servovalve.model,
+            actuator_model: base.actuator.model,
+            actuator_costs: baseline.actuator_costs,
+            effort: self.effort,
+            noise: self.noise,
+            identification: id,
+        }
     }
 }
 
@@ -224,65 +312,36 @@ impl<'a> Diagnoser<'a> {
     /// at all while the dominant effect is missing (a specimen's fit with a deadband
     /// unmodelled ends at its damping bound; stick-slip's with a specimen unmodelled does
     /// not improve the baseline).
-    fn search_causes(&self, mut current: Current) -> Found {
+    fn search_causes(&self, current: Current) -> Found {
         let table_mass_kg = self.table.table.mass_kg;
-        let (mut causes, mut partial) = (Vec::new(), Vec::new());
-        let mut first_candidates = Vec::new();
-        let mut cause_rejected = None;
-        let mut searched = self.testable.clone();
         let baseline_report = self.report_missed.rms(&current.report.residual);
+        let mut found = Found::nothing(current);
+        let mut searched = self.testable.clone();
         for round in 0..MAX_CAUSES {
-            let Some((candidates, k, missed)) = self.search(&current, &searched, round) else {
+            let Some((candidates, k, missed)) = self.search(&found.current, &searched, round)
+            else {
                 break;
             };
             let best = candidates[k].clone();
             if round == 0 {
-                first_candidates = candidates;
+                found.first_candidates = candidates;
             }
             // a specimen of several modes is the specimen
             searched.retain(|&e| e.name() != best.effect.name());
-            let current_score = missed.rms(&current.select.score);
-            if crate::diagnose::trace_enabled() {
-                eprintln!(
-                    "  search {}: {} sample-wise on missed select cells {:.3} -> {:.3}, standardised {:.3} -> {:.3}",
-                    round + 1,
-                    best.effect.name(),
-                    missed.rms(&current.select.deviation),
-                    missed.rms(&best.select.deviation),
-                    missed.rms(&current.select.residual),
-                    missed.rms(&best.select.residual),
-                );
-            }
-            let chance = || {
-                let chance = self.chance_factor(&current, &missed);
-                if crate::diagnose::trace_enabled() {
-                    eprintln!(
-                        "  search {}: chance moves the score by {chance:.4}",
-                        round + 1
-                    );
-                }
-                chance
-            };
-            // a cause by every other rule is still no cause when its gain is a spread
-            // credited with a deterministic residual (measured only then: two more runs)
-            let judged = match verdict(&best, current_score, chance, table_mass_kg) {
-                Verdict::Cause => self
-                    .credited_to_spread(&current, &best, &missed, round)
-                    .map_or(Verdict::Cause, Verdict::Partial),
-                other => other,
-            };
-            match judged {
+            let current_score = missed.rms(&found.current.select.score);
+            self.trace_search(round, &best, &found.current, &missed);
+            match self.judge(&best, &found.current, &missed, round) {
                 Verdict::Cause => {
                     let (cause, extended) =
-                        self.accept(best, &current, &missed, round, &mut causes);
-                    causes.push(cause);
-                    current = extended;
+                        self.accept(best, &found.current, &missed, round, &mut found.causes);
+                    found.causes.push(cause);
+                    found.current = extended;
                 }
                 Verdict::Partial(why) => {
                     if round == 0 && unphysical(&best, table_mass_kg).is_some() {
-                        cause_rejected = Some(why.clone());
+                        found.cause_rejected = Some(why.clone());
                     }
-                    partial.push(Partial {
+                    found.partial.push(Partial {
                         effect: best.effect,
                         parameters: best.parameters.clone(),
                         selection_gain: current_score / best.score,
@@ -293,13 +352,52 @@ impl<'a> Diagnoser<'a> {
                 Verdict::NoGain => break,
             }
         }
-        self.prune(&mut causes, &mut partial, &mut current, baseline_report);
-        Found {
-            causes,
-            partial,
-            first_candidates,
-            cause_rejected,
-            current,
+        self.prune(
+            &mut found.causes,
+            &mut found.partial,
+            &mut found.current,
+            baseline_report,
+        );
+        found
+    }
+
+    /// The verdict on `best`, a search's best candidate on top of `current` ([`verdict`]),
+    /// with what chance moves the score by and whether the gain is a spread credited
+    /// with a deterministic residual measured as its rules reach them.
+    fn judge(&self, best: &Candidate, current: &Current, missed: &Missed, round: usize) -> Verdict {
+        let chance = || {
+            let chance = self.chance_factor(current, missed);
+            if trace_enabled() {
+                eprintln!(
+                    "  search {}: chance moves the score by {chance:.4}",
+                    round + 1
+                );
+            }
+            chance
+        };
+        let spread = || self.credited_to_spread(current, best, missed, round);
+        let current_score = missed.rms(&current.select.score);
+        verdict(
+            best,
+            current_score,
+            chance,
+            spread,
+            self.table.table.mass_kg,
+        )
+    }
+
+    /// The trace of a search's best candidate against `current` on the cells `missed`.
+    fn trace_search(&self, round: usize, best: &Candidate, current: &Current, missed: &Missed) {
+        if trace_enabled() {
+            eprintln!(
+                "  search {}: {} sample-wise on missed select cells {:.3} -> {:.3}, standardised {:.3} -> {:.3}",
+                round + 1,
+                best.effect.name(),
+                missed.rms(&current.select.deviation),
+                missed.rms(&best.select.deviation),
+                missed.rms(&current.select.residual),
+                missed.rms(&best.select.residual),
+            );
         }
     }
 
@@ -354,58 +452,5 @@ impl<'a> Diagnoser<'a> {
             report: best.report,
         };
         (cause, extended)
-    }
-
-    /// How much of the missed selection cells' residual is coherent with the reference
-    /// under `current` and under `best` ([`crate::diagnose::model_error::coherent_power`]
-    /// over the selection quarter, in noise-floor units); cells with no estimate (a test
-    /// too short for its averages) do not count.
-    fn coherence(&self, current: &Params, best: &Candidate, missed: &Missed) -> CoherentSplit {
-        use crate::diagnose::model_error::coherent_power;
-        use crate::diagnose::residuals::simulate_test;
-        use crate::diagnose::Part;
-        let mut sums = [[0.0; 2]; 2];
-        for (k, &i) in self.tests.iter().enumerate() {
-            if !missed.cells[k].values().any(|&m| m) {
-                continue;
-            }
-            // each model's run of the test once, for all its missed channels
-            let runs = [current, &best.params].map(|p| simulate_test(p, self.c, i, Part::Select));
-            for (ch, &is_missed) in missed.cells[k].iter() {
-                let Some(s) = self.noise.of(ch).filter(|_| is_missed) else {
-                    continue;
-                };
-                let [Some(a), Some(b)] = [&runs[0], &runs[1]]
-                    .map(|run| coherent_power(self.c, i, ch, Part::Select, run))
-                else {
-                    continue;
-                };
-                for (m, (coherent, total)) in [a, b].into_iter().enumerate() {
-                    sums[m][0] += coherent / (s * s);
-                    sums[m][1] += total / (s * s);
-                }
-            }
-        }
-        CoherentSplit {
-            current_coherent: sums[0][0],
-            current_total: sums[0][1],
-            candidate_coherent: sums[1][0],
-        }
-    }
-
-    /// Why `best` is credited with a residual its predicted spread cannot hold
-    /// ([`spread_credited`] on [`Diagnoser::coherence`]), if it is.
-    fn credited_to_spread(
-        &self,
-        current: &Current,
-        best: &Candidate,
-        missed: &Missed,
-        round: usize,
-    ) -> Option<String> {
-        let split = self.coherence(&current.params, best, missed);
-        if crate::diagnose::trace_enabled() {
-            eprintln!("  search {}: {} {split:?}", round + 1, best.effect.name());
-        }
-        spread_credited(&split)
     }
 }

@@ -1,6 +1,9 @@
 //! Unit tests of the selection rules of [`super`]: the verdict, the judged candidate, the
 //! effects searched again.
-use super::*;
+use super::polish::explains;
+use super::select::{best_candidate, spread_credited, verdict, CoherentSplit, Rule, Verdict};
+use crate::diagnose::output::Candidate;
+use crate::diagnose::{Effect, EXPLAINED_RATIO, REQUIRED_GAIN};
 
 #[test]
 fn a_candidate_explains_the_data_up_to_the_explained_ratio() {
@@ -43,30 +46,30 @@ fn the_verdict_needs_gain_physics_and_evidence() {
     let mut c = Candidate::empty(Effect::ValveDeadband);
     c.score = 1.0;
     assert!(matches!(
-        verdict(&c, REQUIRED_GAIN * 0.99, || 1.0, 4e4),
+        verdict(&c, REQUIRED_GAIN * 0.99, || 1.0, || None, 4e4),
         Verdict::NoGain
     ));
     assert!(matches!(
-        verdict(&c, REQUIRED_GAIN, || 1.0, 4e4),
+        verdict(&c, REQUIRED_GAIN, || 1.0, || None, 4e4),
         Verdict::Cause
     ));
     // a rough model whose score chance moves by 30 %: the gain is partial at most
     assert!(matches!(
-        verdict(&c, 1.3 * REQUIRED_GAIN * 0.99, || 1.3, 4e4),
+        verdict(&c, 1.3 * REQUIRED_GAIN * 0.99, || 1.3, || None, 4e4),
         Verdict::Partial(_)
     ));
     assert!(matches!(
-        verdict(&c, 1.3 * REQUIRED_GAIN, || 1.3, 4e4),
+        verdict(&c, 1.3 * REQUIRED_GAIN, || 1.3, || None, 4e4),
         Verdict::Cause
     ));
     // chance is not measured for a gain that fails the plain rule
     assert!(matches!(
-        verdict(&c, REQUIRED_GAIN * 0.99, || unreachable!(), 4e4),
+        verdict(&c, REQUIRED_GAIN * 0.99, || unreachable!(), || None, 4e4),
         Verdict::NoGain
     ));
     c.not_evidence = Some("at a bound".into());
     assert!(matches!(
-        verdict(&c, 10.0, || 1.0, 4e4),
+        verdict(&c, 10.0, || 1.0, || None, 4e4),
         Verdict::Partial(_)
     ));
 }
@@ -89,4 +92,77 @@ fn a_deterministic_residual_is_not_credited_to_spread() {
     assert_eq!(spread_credited(&split(3.3, 120.0, 3.3)), None);
     // no estimate at all (every test too short): nothing is claimed against it
     assert_eq!(spread_credited(&split(0.0, 0.0, 0.0)), None);
+}
+
+/// The rules are checked gain, chance, physics, evidence, spread: the order the verdicts
+/// above rely on (each measurement taken only once the cheaper rules pass).
+#[test]
+fn the_rules_are_checked_in_their_order() {
+    assert_eq!(
+        Rule::ORDER,
+        [
+            Rule::Gain,
+            Rule::Chance,
+            Rule::Physical,
+            Rule::Evidence,
+            Rule::Spread
+        ]
+    );
+}
+
+/// A score that is not a number (a run that stopped) gains nothing.
+#[test]
+fn the_gain_rule_fails_a_score_that_is_not_a_number() {
+    let c = Candidate::empty(Effect::ValveDeadband);
+    assert!(matches!(
+        verdict(&c, 10.0, || unreachable!(), || unreachable!(), 4e4),
+        Verdict::NoGain
+    ));
+}
+
+/// The chance rule says by which change of the table mass chance was measured.
+#[test]
+fn the_chance_rule_names_its_measurement() {
+    let mut c = Candidate::empty(Effect::ValveDeadband);
+    c.score = 1.0;
+    let Verdict::Partial(why) = verdict(&c, 1.3, || 2.0, || unreachable!(), 4e4) else {
+        panic!("a gain below twice the bar is partial");
+    };
+    assert!(why.contains("a 0.1 % change of the table mass"), "{why}");
+}
+
+/// An unphysical parameter makes the candidate partial before evidence and spread are read.
+#[test]
+fn the_physical_rule_comes_before_evidence_and_spread() {
+    let mut c = Candidate::empty(Effect::ValveDeadband);
+    c.score = 1.0;
+    c.parameters.insert("deadband".into(), f64::NAN);
+    c.not_evidence = Some("at a bound".into());
+    let Verdict::Partial(why) = verdict(&c, 10.0, || 1.0, || unreachable!(), 4e4) else {
+        panic!("an unphysical candidate is partial");
+    };
+    assert_ne!(why, "at a bound");
+}
+
+/// A candidate that is no evidence is partial with the reason, the spread not measured.
+#[test]
+fn the_evidence_rule_gives_its_reason() {
+    let mut c = Candidate::empty(Effect::ValveDeadband);
+    c.score = 1.0;
+    c.not_evidence = Some("at a bound".into());
+    let v = verdict(&c, 10.0, || 1.0, || unreachable!(), 4e4);
+    assert!(matches!(v, Verdict::Partial(why) if why == "at a bound"));
+}
+
+/// A cause by every other rule is partial when its gain is credited to spread.
+#[test]
+fn the_spread_rule_comes_last() {
+    let mut c = Candidate::empty(Effect::ValveDeadband);
+    c.score = 1.0;
+    let v = verdict(&c, 10.0, || 1.0, || Some("coherent".into()), 4e4);
+    assert!(matches!(v, Verdict::Partial(why) if why == "coherent"));
+    assert!(matches!(
+        verdict(&c, 10.0, || 1.0, || None, 4e4),
+        Verdict::Cause
+    ));
 }
