@@ -438,7 +438,8 @@ fn why_not(p: &Params, c: &Campaign, tests: &[usize]) -> String {
     }
     tests
         .iter()
-        .find_map(|&i| compare::simulate_as_run(p, c, i).err())
+        .find_map(|&i| compare::simulate_test(p, c, i).err())
+        .map(|e| e.to_string())
         .unwrap_or_else(|| "a residual was not finite".to_string())
 }
 
