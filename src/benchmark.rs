@@ -240,3 +240,25 @@ pub fn drive_rows() -> Vec<BenchRow> {
     }
     rows
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// The benchmark's random workload is the paper program's R2, as before it was
+    /// picked by kind and control rather than by name.
+    #[test]
+    fn the_random_workload_is_the_mass_test_r2() {
+        let program = synth::paper_program(4.0);
+        let r2 = program.iter().position(|t| t.name == "R2").unwrap();
+        let expected = synth::reference(&program[r2], r2, 1, 4.0, synth::SAMPLE_RATE_HZ)
+            .unwrap()
+            .inputs();
+        let got = random_inputs(4.0);
+        assert_eq!(got.len(), expected.len());
+        assert!(got
+            .iter()
+            .zip(&expected)
+            .all(|(a, b)| a.reference.displacement_m == b.reference.displacement_m));
+    }
+}

@@ -215,53 +215,9 @@ impl Identification {
         let mut d: Vec<(&'static str, &'static str)> = self
             .unknown_inputs
             .iter()
-            .map(|k| {
-                (
-                    *k,
-                    "not in campaign.toml and not identified from these recordings: \
-                     TREES Lab default written, not a property of this table",
-                )
-            })
+            .map(|k| (*k, UNKNOWN_INPUT))
             .collect();
-        let mut add = |missing: bool, keys: &[&'static str], why: &'static str| {
-            if missing {
-                d.extend(keys.iter().map(|k| (*k, why)));
-            }
-        };
-        add(
-            self.servovalve.is_none(),
-            &[
-                "servovalve.gain",
-                "servovalve.time_constant_s",
-                "servovalve.natural_frequency_hz",
-                "servovalve.damping_ratio",
-            ],
-            "servovalve not identified (see missing)",
-        );
-        add(
-            self.mass_kg.is_none(),
-            &["table.mass_kg"],
-            "no mass estimate (see missing)",
-        );
-        add(
-            self.triangles.is_none(),
-            &["table.stiffness_n_m"],
-            "no triangle estimate: zero stiffness assumed",
-        );
-        add(
-            self.friction.is_none(),
-            &[
-                "friction.force_n",
-                "friction.yield_displacement_m",
-                "friction.shape",
-            ],
-            "Bouc-Wen friction not identified (see missing)",
-        );
-        add(
-            self.oil_column.is_none(),
-            &["actuator.bulk_modulus_pa", "actuator.leakage_m3_s_pa"],
-            "oil column not identified (see missing)",
-        );
+        d.extend(self.unidentified_keys());
         if let Some(cl) = &self.closed_loop {
             let fitted = |k: &str| cl.estimates.iter().any(|e| e.key == k);
             let held = |k: &str| cl.conventions.iter().any(|e| e.key == k);
@@ -270,12 +226,56 @@ impl Identification {
         }
         for (k, why) in d.iter_mut() {
             if unused_by_valve(self.params.servovalve.model, k) {
-                *why = "not used by the chosen valve order (servovalve.model): written for a \
-                        switch of order, not a property of this table";
+                *why = UNUSED_BY_VALVE;
             }
         }
         d.extend(LIMIT_KEYS.iter().map(|k| (*k, LIMITS_DEFAULT)));
         d
+    }
+
+    /// The keys of each section-4 estimate that could not be made, with why.
+    fn unidentified_keys(&self) -> Vec<(&'static str, &'static str)> {
+        let groups: [(bool, &[&'static str], &'static str); 5] = [
+            (
+                self.servovalve.is_none(),
+                &[
+                    "servovalve.gain",
+                    "servovalve.time_constant_s",
+                    "servovalve.natural_frequency_hz",
+                    "servovalve.damping_ratio",
+                ],
+                "servovalve not identified (see missing)",
+            ),
+            (
+                self.mass_kg.is_none(),
+                &["table.mass_kg"],
+                "no mass estimate (see missing)",
+            ),
+            (
+                self.triangles.is_none(),
+                &["table.stiffness_n_m"],
+                "no triangle estimate: zero stiffness assumed",
+            ),
+            (
+                self.friction.is_none(),
+                &[
+                    "friction.force_n",
+                    "friction.yield_displacement_m",
+                    "friction.shape",
+                ],
+                "Bouc-Wen friction not identified (see missing)",
+            ),
+            (
+                self.oil_column.is_none(),
+                &["actuator.bulk_modulus_pa", "actuator.leakage_m3_s_pa"],
+                "oil column not identified (see missing)",
+            ),
+        ];
+        groups
+            .into_iter()
+            .filter(|(missing, ..)| *missing)
+            .flat_map(|(_, keys, why)| keys.iter().map(move |k| (*k, why)))
+            .collect()
     }
 
     /// Oil-column figures of the identified parameters.
@@ -287,6 +287,14 @@ impl Identification {
 /// The operating envelope's keys (spec section 8): campaign.toml has no key for them and
 /// no recording shows them, so the parameter file always holds the TREES Lab table's.
 const LIMIT_KEYS: [&str; 2] = ["limits.stroke_m", "limits.velocity_m_s"];
+
+/// Why a geometry or gain key the campaign does not give holds a default.
+const UNKNOWN_INPUT: &str = "not in campaign.toml and not identified from these recordings: \
+     TREES Lab default written, not a property of this table";
+
+/// Why a key of the other valve order holds a default ([`unused_by_valve`]).
+const UNUSED_BY_VALVE: &str = "not used by the chosen valve order (servovalve.model): written \
+     for a switch of order, not a property of this table";
 
 /// Why [`LIMIT_KEYS`] are defaults.
 const LIMITS_DEFAULT: &str = "no recording shows the operating envelope: the TREES Lab \
