@@ -162,14 +162,9 @@ pub fn closed_loop_row() -> BenchRow {
     }
 }
 
-/// Drive iteration (issue 19's speed targets: an offline drive of a 40-s record with the
-/// full nonlinear model under 20 s, an online iteration under 5 s): a 40-s earthquake-like
-/// target (a decaying sum of sines, 0.3 g) at 1024 Hz on the nonlinear actuator with a
-/// 25-t specimen; the online iteration takes the offline prediction as the measured run.
-pub fn drive_rows() -> Vec<BenchRow> {
-    use crate::motion::drive::{offline, online, DriveOptions, Previous};
-    use crate::motion::prepare::{prepare, PrepareOptions};
-    use crate::motion::read::GroundMotion;
+/// The drive benchmark's ground motion: 40 s at 100 Hz of four decaying sines
+/// (0.7-6.1 Hz) under a 3-s ramp and a 10-s decay.
+fn earthquake_like_motion() -> crate::motion::read::GroundMotion {
     let step_s = 0.01;
     let acceleration_m_s2 = (0..4000)
         .map(|k| {
@@ -182,15 +177,31 @@ pub fn drive_rows() -> Vec<BenchRow> {
                     .sum::<f64>()
         })
         .collect();
-    let motion = GroundMotion {
+    crate::motion::read::GroundMotion {
         step_s,
         acceleration_m_s2,
         source: "bench".into(),
-    };
+    }
+}
+
+/// The drive benchmark's table: the nonlinear actuator with a 25-t specimen.
+fn drive_table() -> Params {
     let mut p = Params::trees_lab();
-    p.actuator.model = crate::params::ActuatorModel::Nonlinear;
+    p.actuator.model = ActuatorModel::Nonlinear;
     p.specimen.enabled = true;
     p.specimen.mass_kg = 25_000.0;
+    p
+}
+
+/// Drive iteration (issue 19's speed targets: an offline drive of a 40-s record with the
+/// full nonlinear model under 20 s, an online iteration under 5 s): a 40-s earthquake-like
+/// target (a decaying sum of sines, 0.3 g) at 1024 Hz on the nonlinear actuator with a
+/// 25-t specimen; the online iteration takes the offline prediction as the measured run.
+pub fn drive_rows() -> Vec<BenchRow> {
+    use crate::motion::drive::{offline, online, DriveOptions, Previous};
+    use crate::motion::prepare::{prepare, PrepareOptions};
+    let motion = earthquake_like_motion();
+    let p = drive_table();
     let options = PrepareOptions {
         rate_hz: 1024.0,
         highpass_hz: None,

@@ -41,6 +41,23 @@ pub enum Quantity {
 }
 
 impl Quantity {
+    /// Whether it is one of the device's ([`super::DeviceFit`]).
+    pub fn is_device(self) -> bool {
+        use Quantity::*;
+        matches!(
+            self,
+            DeviceForce
+                | DeviceYieldDisplacement
+                | DeviceShape
+                | DeviceViscous
+                | DeviceStiffness
+                | DeviceMass
+                | DeviceOffset
+                | DeviceNrmse
+                | DeviceFitPercent
+        )
+    }
+
     /// The key `block.name` of the JSON (issue 5) and the report.
     pub fn key(self) -> &'static str {
         use Quantity::*;

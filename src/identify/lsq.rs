@@ -136,8 +136,8 @@ where
 {
     /// `t` within the bounds.
     fn clamp(&self, t: &mut [f64]) {
-        for i in 0..t.len() {
-            t[i] = t[i].clamp(self.lower[i], self.upper[i]);
+        for (i, x) in t.iter_mut().enumerate() {
+            *x = x.clamp(self.lower[i], self.upper[i]);
         }
     }
 

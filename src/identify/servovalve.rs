@@ -196,7 +196,7 @@ impl ValveFrf {
     fn phase_valid_to_hz(&self, valve: &ValveTf) -> f64 {
         let f = &self.frequency_hz;
         let mut valid_to = f[0];
-        for k in 0..f.len() {
+        for (k, &f_hz) in f.iter().enumerate() {
             let dp = (valve.response(self.s(k)) / self.h[k])
                 .arg()
                 .to_degrees()
@@ -204,7 +204,7 @@ impl ValveFrf {
             if dp > PHASE_VALID_DEG {
                 break;
             }
-            valid_to = f[k];
+            valid_to = f_hz;
         }
         valid_to
     }

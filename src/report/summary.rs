@@ -4,7 +4,6 @@
 //! ([`Identification::estimates`], [`crate::identify::greybox::FreeEstimate`]).
 
 use super::page::{Section, Table};
-use crate::identify::greybox::GreyParameter;
 use crate::identify::{Identification, Quantity};
 use crate::linear::{Linearisation, OilColumn};
 use crate::params::{Params, ServovalveModel};
@@ -86,11 +85,6 @@ fn shown(q: Quantity) -> Option<Truth> {
     Some(truth)
 }
 
-/// Whether `q` is one of the device's (shown only when a device was fitted).
-fn of_device(q: Quantity) -> bool {
-    q.key().starts_with("device.")
-}
-
 /// The peak of the bare table's transfer function (the validation's truth: the
 /// identification models the table without specimen or foundation).
 fn bare_table_peak_hz(p: &Params) -> Option<f64> {
@@ -107,7 +101,8 @@ pub fn summary_rows(id: &Identification, truth: Option<&Params>) -> Vec<Row> {
     let mut rows: Vec<Row> = id
         .estimates()
         .into_iter()
-        .filter(|e| id.device.is_some() || !of_device(e.quantity))
+        // the device's only when a device was fitted
+        .filter(|e| id.device.is_some() || !e.quantity.is_device())
         .filter_map(|e| {
             let t = shown(e.quantity)?;
             Some(Row {
@@ -119,17 +114,11 @@ pub fn summary_rows(id: &Identification, truth: Option<&Params>) -> Vec<Row> {
         })
         .collect();
     if let Some(cl) = &id.closed_loop {
-        rows.extend(cl.estimates.iter().map(|e| {
-            Row {
-                key: format!("closed_loop: {}", e.key),
-                value: Some(e.value),
-                sigma: e.sigma,
-                truth: GreyParameter::ALL
-                    .iter()
-                    .find(|g| g.key() == e.key)
-                    .zip(truth)
-                    .map(|(g, p)| g.get(p)),
-            }
+        rows.extend(cl.estimates.iter().map(|e| Row {
+            key: format!("closed_loop: {}", e.key),
+            value: Some(e.value),
+            sigma: e.sigma,
+            truth: truth.map(|p| e.parameter.get(p)),
         }));
     }
     rows
