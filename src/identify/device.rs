@@ -274,30 +274,8 @@ pub fn fit_device(c: &Campaign, roles: &DeviceRoles) -> Result<DeviceFit, Identi
     let (spec, rec) = (&c.info.tests[roles.fit], &c.records[roles.fit]);
     let name = spec.name.as_str();
     let k = Kinematics::of(name, rec, fs)?;
-    if k.work_j(fs) <= 0.0 {
-        return Err(IdentifyError::failed(
-            name,
-            format!(
-                "force_n does net work {:.4e} J on the motion: a device dissipates, so the recorded force has the \
-                 opposite sign of the project's convention (force on the device along its motion; a negative \
-                 `scale` in [columns] turns it): device force not identified",
-                -k.work_j(fs)
-            ),
-        ));
-    }
-    let (t0, lower, upper, scale) =
-        problem(&k).ok_or_else(|| IdentifyError::failed(name, "device start fit failed"))?;
-    let residual = |p: &[f64]| -> Option<Vec<f64>> {
-        Some(k.model(p).iter().zip(&k.f).map(|(m, f)| m - f).collect())
-    };
-    // each Jacobian column is a Bouc-Wen path over the whole record: in parallel
-    let opts = LsqOptions {
-        parallel: true,
-        ..LsqOptions::default()
-    };
-    let fit = minimise(residual, &t0, &lower, &upper, &scale, opts)
-        .ok_or_else(|| IdentifyError::failed(name, "device fit failed"))?;
-    check_moved(name, "device fit", &fit, &t0, &scale)?;
+    check_dissipates(name, &k, fs)?;
+    let fit = fit_force(name, &k)?;
     let p = &fit.theta;
     check_bounds(name, "device mass (kg)", p[5], [0.0, MASS_BOUNDS_KG[1]])?;
     let r: Vec<f64> = k.model(p).iter().zip(&k.f).map(|(m, f)| m - f).collect();
@@ -336,6 +314,43 @@ pub fn fit_device(c: &Campaign, roles: &DeviceRoles) -> Result<DeviceFit, Identi
             .filter_map(|r| r.as_ref().err().map(|e| e.to_string()))
             .collect(),
     })
+}
+
+/// `Err` unless the recorded force of test `name` does net negative work on the motion
+/// `k` (at `fs`): a device dissipates, so a force doing work has the opposite sign of
+/// the project's convention.
+fn check_dissipates(name: &str, k: &Kinematics, fs: f64) -> Result<(), IdentifyError> {
+    if k.work_j(fs) > 0.0 || k.work_j(fs).is_nan() {
+        return Ok(());
+    }
+    Err(IdentifyError::failed(
+        name,
+        format!(
+            "force_n does net work {:.4e} J on the motion: a device dissipates, so the recorded force has the \
+             opposite sign of the project's convention (force on the device along its motion; a negative \
+             `scale` in [columns] turns it): device force not identified",
+            -k.work_j(fs)
+        ),
+    ))
+}
+
+/// Levenberg-Marquardt of the device model on the force of test `name` (motion `k`)
+/// from its linear start ([`problem`]).
+fn fit_force(name: &str, k: &Kinematics) -> Result<lsq::LsqFit, IdentifyError> {
+    let (t0, lower, upper, scale) =
+        problem(k).ok_or_else(|| IdentifyError::failed(name, "device start fit failed"))?;
+    let residual = |p: &[f64]| -> Option<Vec<f64>> {
+        Some(k.model(p).iter().zip(&k.f).map(|(m, f)| m - f).collect())
+    };
+    // each Jacobian column is a Bouc-Wen path over the whole record: in parallel
+    let opts = LsqOptions {
+        parallel: true,
+        ..LsqOptions::default()
+    };
+    let fit = minimise(residual, &t0, &lower, &upper, &scale, opts)
+        .ok_or_else(|| IdentifyError::failed(name, "device fit failed"))?;
+    check_moved(name, "device fit", &fit, &t0, &scale)?;
+    Ok(fit)
 }
 
 #[cfg(test)]

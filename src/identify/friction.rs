@@ -28,55 +28,89 @@ pub(super) fn steady_range(spec: &TestSpec, rec: &Record) -> std::ops::Range<usi
     first..last.max(first)
 }
 
+/// Fewest samples away from reversals for the triangles' two-parameter fit.
+const MIN_TRIANGLE_SAMPLES: usize = 10;
+/// A sample is sliding when its speed exceeds this, m/s (the sign of `v` is the
+/// friction's only there).
+const SLIDING_SPEED_M_S: f64 = 1e-4;
+/// Half-width of the triangles' displacement smoothing before differentiation, samples.
+const TRIANGLE_SMOOTHING_HALF_WIDTH: usize = 8;
+
+/// The triangles' force balance away from reversals (eq. 4.9): rows `[x, sign v]`
+/// against `F_A - M a`, with the tests used and their steady cycles.
+#[derive(Default)]
+struct TriangleRows {
+    names: Vec<String>,
+    cycles: f64,
+    rows: Vec<[f64; 2]>,
+    rhs: Vec<f64>,
+}
+
+impl TriangleRows {
+    /// Every triangle test of `c` recording displacement, acceleration and force, with
+    /// the table's mass `mass_kg`.
+    fn of(c: &Campaign, mass_kg: f64) -> TriangleRows {
+        let mut t = TriangleRows::default();
+        for (spec, rec) in c.info.tests.iter().zip(&c.records) {
+            if spec.kind != crate::campaign::TestKind::Triangle {
+                continue;
+            }
+            let (Some(x_measured), Some(a_measured), Some(force)) = (
+                rec.measured(Measured::Displacement),
+                rec.measured(Measured::Acceleration),
+                rec.measured(Measured::Force),
+            ) else {
+                continue; // the force balance needs all three
+            };
+            t.names.push(spec.name.clone());
+            let fs = c.sample_rate_for(spec);
+            let range = steady_range(spec, rec);
+            t.cycles += range.len() as f64 / fs
+                * spec.frequency_hz.filter(|f| f.is_finite()).unwrap_or(0.0);
+            let amp = spec.amplitude_m.unwrap_or(1.0);
+            let xs = smooth(x_measured, TRIANGLE_SMOOTHING_HALF_WIDTH);
+            let v = derivative(&xs, fs);
+            for i in range {
+                let x = rec.ref_displacement_m[i];
+                if x.abs() < TRIANGLE_FRACTION * amp && v[i].abs() > SLIDING_SPEED_M_S {
+                    t.rows.push([x_measured[i], v[i].signum()]);
+                    t.rhs.push(force[i] - mass_kg * a_measured[i]);
+                }
+            }
+        }
+        t
+    }
+
+    /// Why these rows cannot give the fit, if they cannot.
+    fn unusable(&self) -> Option<IdentifyError> {
+        if self.names.is_empty() {
+            return Some(IdentifyError::not_usable(
+                "no triangle test: stiffness and sliding friction not identified from triangles",
+            ));
+        }
+        let cycles = self.cycles;
+        if cycles.is_nan() || cycles < MIN_TRIANGLE_CYCLES || self.rows.len() < MIN_TRIANGLE_SAMPLES
+        {
+            return Some(IdentifyError::not_usable(format!(
+                "the triangle tests ({}) hold {cycles:.2} steady cycles and {} samples away from reversals; at least {MIN_TRIANGLE_CYCLES} cycle and {MIN_TRIANGLE_SAMPLES} samples needed: stiffness and sliding friction not identified",
+                self.names.join(", "),
+                self.rows.len()
+            )));
+        }
+        None
+    }
+}
+
 /// Triangles (eqs. 4.9-4.10): away from reversals the acceleration is zero and
 /// `F_A - M a = k x + F_mu sign(v)`; least squares over every triangle.
 pub fn fit_triangles(c: &Campaign, mass_kg: f64) -> Result<TriangleFit, IdentifyError> {
-    let (mut rows, mut rhs, mut names) = (Vec::new(), Vec::new(), Vec::new());
-    let mut cycles = 0.0;
-    for (spec, rec) in c.info.tests.iter().zip(&c.records) {
-        if spec.kind != crate::campaign::TestKind::Triangle {
-            continue;
-        }
-        let needs = [
-            Measured::Displacement,
-            Measured::Acceleration,
-            Measured::Force,
-        ];
-        let (Some(x_measured), Some(a_measured), Some(force)) = (
-            rec.measured(needs[0]),
-            rec.measured(needs[1]),
-            rec.measured(needs[2]),
-        ) else {
-            continue; // the force balance needs all three
-        };
-        names.push(spec.name.clone());
-        let fs = c.sample_rate_for(spec);
-        let range = steady_range(spec, rec);
-        cycles +=
-            range.len() as f64 / fs * spec.frequency_hz.filter(|f| f.is_finite()).unwrap_or(0.0);
-        let amp = spec.amplitude_m.unwrap_or(1.0);
-        let xs = smooth(x_measured, 8);
-        let v = derivative(&xs, fs);
-        for i in range {
-            let x = rec.ref_displacement_m[i];
-            if x.abs() < TRIANGLE_FRACTION * amp && v[i].abs() > 1e-4 {
-                rows.push([x_measured[i], v[i].signum()]);
-                rhs.push(force[i] - mass_kg * a_measured[i]);
-            }
-        }
+    let t = TriangleRows::of(c, mass_kg);
+    if let Some(e) = t.unusable() {
+        return Err(e);
     }
-    if names.is_empty() {
-        return Err(IdentifyError::not_usable(
-            "no triangle test: stiffness and sliding friction not identified from triangles",
-        ));
-    }
-    if cycles.is_nan() || cycles < MIN_TRIANGLE_CYCLES || rows.len() < 10 {
-        return Err(IdentifyError::not_usable(format!(
-            "the triangle tests ({}) hold {cycles:.2} steady cycles and {} samples away from reversals; at least {MIN_TRIANGLE_CYCLES} cycle and 10 samples needed: stiffness and sliding friction not identified",
-            names.join(", "),
-            rows.len()
-        )));
-    }
+    let TriangleRows {
+        names, rows, rhs, ..
+    } = t;
     let a = DMatrix::from_fn(rows.len(), 2, |i, j| rows[i][j]);
     let b = DVector::from_vec(rhs.clone());
     let (x, sigma) = lsq::linear(&a, &b).ok_or(IdentifyError::not_usable("triangle fit failed"))?;
@@ -215,15 +249,58 @@ pub(super) fn sine_data(c: &Campaign, names: &[&str]) -> (Vec<SineData>, Vec<Str
     (data, short)
 }
 
-/// Bouc-Wen parameters (eqs. 4.14-4.15) fitted to `F_D = F_A - M a - k x` (eq. 4.13)
-/// of the slow sines; `F_mu` enters linearly, `Y` and `b` by Levenberg-Marquardt.
-pub fn fit_friction(
-    c: &Campaign,
-    slow: &[String],
-    mass_kg: f64,
-    stiffness: f64,
-    f_mu0: f64,
-) -> Result<FrictionFit, IdentifyError> {
+/// Every this many samples of the dissipative force enters the Bouc-Wen fit: the
+/// friction changes over `Y`, well resolved at 128 Hz from 512 Hz.
+const BOUC_WEN_DECIMATION: usize = 4;
+/// Start of the friction force when the triangles give none, N.
+const FRICTION_START_N: f64 = 1000.0;
+
+/// The slow sines' dissipative force `F_D = F_A - M a - k x` (eq. 4.13), what the
+/// Bouc-Wen friction `F_mu Z` (eq. 4.14) is fitted to.
+struct Dissipative {
+    data: Vec<SineData>,
+    /// `F_D` of each test of `data`.
+    force_n: Vec<Vec<f64>>,
+}
+
+impl Dissipative {
+    fn of(data: Vec<SineData>, mass_kg: f64, stiffness: f64) -> Dissipative {
+        let force_n = data
+            .iter()
+            .map(|d| {
+                (0..d.x.len())
+                    .map(|i| d.f[i] - mass_kg * d.a[i] - stiffness * d.x[i])
+                    .collect()
+            })
+            .collect();
+        Dissipative { data, force_n }
+    }
+
+    /// `F_mu Z - F_D` over every test (decimated), `Z` along each test's path from the
+    /// sign of its first velocity with yield `y` and shape `b`.
+    fn residuals(&self, fmu: f64, y: f64, b: f64) -> Vec<f64> {
+        let mut r = Vec::new();
+        for (d, fdi) in self.data.iter().zip(&self.force_n) {
+            let z = bouc_wen_path(&d.path, y, b, d.v[0].signum());
+            for i in (0..z.len()).step_by(BOUC_WEN_DECIMATION) {
+                r.push(fmu * z[i] - fdi[i]);
+            }
+        }
+        r
+    }
+
+    /// The tests' names, joined.
+    fn names(&self) -> String {
+        self.data
+            .iter()
+            .map(|d| d.name.as_str())
+            .collect::<Vec<_>>()
+            .join(", ")
+    }
+}
+
+/// The slow sines `slow` of `c` usable by the friction fit, or why none is.
+fn slow_sines(c: &Campaign, slow: &[String]) -> Result<Vec<SineData>, IdentifyError> {
     let names: Vec<&str> = slow.iter().map(String::as_str).collect();
     let (data, short) = sine_data(c, &names);
     if data.is_empty() {
@@ -236,31 +313,24 @@ pub fn fit_friction(
             short.iter().map(|s| format!("; {s}")).collect::<String>()
         )));
     }
-    let fd: Vec<Vec<f64>> = data
-        .iter()
-        .map(|d| {
-            (0..d.x.len())
-                .map(|i| d.f[i] - mass_kg * d.a[i] - stiffness * d.x[i])
-                .collect()
-        })
-        .collect();
-    // decimate: the friction changes over Y, well resolved at 128 Hz
-    let dec = 4;
-    let residual = |p: &[f64]| -> Option<Vec<f64>> {
-        let (fmu, y, b) = (p[0], p[1], p[2]);
-        let mut r = Vec::new();
-        for (d, fdi) in data.iter().zip(&fd) {
-            let z = bouc_wen_path(&d.path, y, b, d.v[0].signum());
-            for i in (0..z.len()).step_by(dec) {
-                r.push(fmu * z[i] - fdi[i]);
-            }
-        }
-        Some(r)
-    };
+    Ok(data)
+}
+
+/// Bouc-Wen parameters (eqs. 4.14-4.15) fitted to `F_D = F_A - M a - k x` (eq. 4.13)
+/// of the slow sines; `F_mu` enters linearly, `Y` and `b` by Levenberg-Marquardt.
+pub fn fit_friction(
+    c: &Campaign,
+    slow: &[String],
+    mass_kg: f64,
+    stiffness: f64,
+    f_mu0: f64,
+) -> Result<FrictionFit, IdentifyError> {
+    let fd = Dissipative::of(slow_sines(c, slow)?, mass_kg, stiffness);
+    let residual = |p: &[f64]| -> Option<Vec<f64>> { Some(fd.residuals(p[0], p[1], p[2])) };
     let f0 = if f_mu0.is_finite() && f_mu0 > 0.0 {
         f_mu0
     } else {
-        1000.0
+        FRICTION_START_N
     };
     let (t0, scale) = ([f0, 1e-3, 0.5], [f0, 1e-3, 0.5]);
     let fit = minimise(
@@ -272,23 +342,24 @@ pub fn fit_friction(
         LsqOptions::default(),
     )
     .ok_or(IdentifyError::not_usable("Bouc-Wen fit failed"))?;
-    let who = data
-        .iter()
-        .map(|d| d.name.as_str())
-        .collect::<Vec<_>>()
-        .join(", ");
-    check_moved(&who, "Bouc-Wen fit", &fit, &t0, &scale)?;
+    check_moved(&fd.names(), "Bouc-Wen fit", &fit, &t0, &scale)?;
     // the residual is far from white (the table's jitter, the shape's model error at
     // each reversal): the sigmas are widened by its integrated autocorrelation, as the
     // closed loop's and the device's are
     let widen =
         residual(&fit.theta).map_or(1.0, |r| correlation_factor(&r, MAX_CORRELATION_LAG).sqrt());
+    Ok(friction_fit(&fd, &fit, widen))
+}
+
+/// The result of the Bouc-Wen fit `fit` of `fd`, its sigmas widened by `widen`, with
+/// the first test's figure (decimated).
+fn friction_fit(fd: &Dissipative, fit: &lsq::LsqFit, widen: f64) -> FrictionFit {
     let (fmu, y, b) = (fit.theta[0], fit.theta[1], fit.theta[2]);
-    let d0 = &data[0];
+    let d0 = &fd.data[0];
     let z = bouc_wen_path(&d0.path, y, b, d0.v[0].signum());
     let step = (d0.x.len() / 2000).max(1);
-    Ok(FrictionFit {
-        tests: data.iter().map(|d| d.name.clone()).collect(),
+    FrictionFit {
+        tests: fd.data.iter().map(|d| d.name.clone()).collect(),
         force_n: fmu,
         yield_displacement_m: y,
         shape: b,
@@ -298,7 +369,7 @@ pub fn fit_friction(
         rms_error_n: (fit.cost / fit.residuals as f64).sqrt(),
         displacement_m: d0.x.iter().step_by(step).copied().collect(),
         velocity_m_s: d0.v.iter().step_by(step).copied().collect(),
-        dissipative_force_n: fd[0].iter().step_by(step).copied().collect(),
+        dissipative_force_n: fd.force_n[0].iter().step_by(step).copied().collect(),
         fitted_force_n: z.iter().step_by(step).map(|z| fmu * z).collect(),
-    })
+    }
 }

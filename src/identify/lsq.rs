@@ -47,6 +47,21 @@ pub struct LsqFit {
     pub iterations: usize,
 }
 
+/// Levenberg-Marquardt's damping at the start.
+const LAMBDA_START: f64 = 1e-3;
+/// The damping is multiplied by this after an accepted step (trust the Gauss-Newton step
+/// more) and by [`LAMBDA_UP`] after a rejected one (the classic 0.3 and 10: a rejection
+/// costs one evaluation, so the damping climbs fast and relaxes slowly).
+const LAMBDA_DOWN: f64 = 0.3;
+const LAMBDA_UP: f64 = 10.0;
+/// Floor of the damping after accepted steps.
+const LAMBDA_MIN: f64 = 1e-12;
+/// Trial steps per iteration, each with ten times the damping of the last: 12 span
+/// twelve decades; an iteration whose steps all fail ends the fit.
+const TRIALS_PER_ITERATION: usize = 12;
+/// Floor of `scale^2 x` this on the damped diagonal (a dead column still gets damping).
+const DIAGONAL_FLOOR: f64 = 1e-30;
+
 /// Minimise `sum r(theta)^2` from `theta0` within `[lower, upper]` (per parameter).
 /// `scale` gives each parameter's typical magnitude (for steps and damping).
 /// Residuals that are not finite make a trial step fail (it is rejected).
@@ -61,45 +76,83 @@ pub fn minimise<F>(
 where
     F: Fn(&[f64]) -> Option<Vec<f64>> + Sync,
 {
-    let n = theta0.len();
     if !problem_is_sound(theta0, lower, upper, scale) {
         return None;
     }
-    let clamp = |t: &mut Vec<f64>| {
-        for i in 0..n {
-            t[i] = t[i].clamp(lower[i], upper[i]);
-        }
+    let problem = Problem {
+        residuals: &residuals,
+        lower,
+        upper,
+        scale,
+        opts,
     };
-    let finite = |r: &Vec<f64>| r.iter().all(|x| x.is_finite());
-    let cost = |r: &[f64]| r.iter().map(|x| x * x).sum::<f64>();
     let mut theta = theta0.to_vec();
-    clamp(&mut theta);
-    let mut r = residuals(&theta).filter(finite)?;
+    problem.clamp(&mut theta);
+    let mut r = problem.residuals_at(&theta)?;
     let m = r.len();
     let mut c = cost(&r);
-    let mut lambda = 1e-3;
+    let mut lambda = LAMBDA_START;
     let mut iterations = 0;
-    let jacobian = |theta: &[f64], r: &[f64]| -> Option<DMatrix<f64>> {
-        let column = |j: usize| -> Option<Vec<f64>> {
-            let h = opts.step * theta[j].abs().max(scale[j]);
-            // steps inside the bounds, forward first; a parameter pinned by its bounds has
-            // no column; a step whose model cannot be simulated (a limit of the model's
-            // that is not a box bound, such as the solver's reach) is taken the other way
-            let steps = [h, -h]
-                .into_iter()
-                .filter(|s| (lower[j]..=upper[j]).contains(&(theta[j] + s)));
-            let mut pinned = true;
-            for h in steps {
-                pinned = false;
-                let mut t = theta.to_vec();
-                t[j] += h;
-                if let Some(rp) = residuals(&t).filter(finite) {
-                    return Some(rp.iter().zip(r).map(|(a, b)| (a - b) / h).collect());
-                }
-            }
-            pinned.then(|| vec![0.0; r.len()])
+    let mut jm = problem.jacobian(&theta, &r)?;
+    while iterations < opts.max_iterations {
+        iterations += 1;
+        let Some(step) = problem.damped_step(&jm, &theta, &r, c, &mut lambda) else {
+            break;
         };
-        let cols: Vec<Option<Vec<f64>>> = if opts.parallel {
+        let rel = (c - step.cost) / c.max(1e-300);
+        (theta, r, c) = (step.theta, step.residuals, step.cost);
+        if rel < opts.tolerance {
+            return Some(finish(theta, c, m, &jm, iterations));
+        }
+        jm = problem.jacobian(&theta, &r)?;
+    }
+    Some(finish(theta, c, m, &jm, iterations))
+}
+
+/// Sum of squares of `r`.
+fn cost(r: &[f64]) -> f64 {
+    r.iter().map(|x| x * x).sum::<f64>()
+}
+
+/// What [`minimise`] minimises: the residuals and the box, scales and options.
+struct Problem<'a, F> {
+    residuals: &'a F,
+    lower: &'a [f64],
+    upper: &'a [f64],
+    scale: &'a [f64],
+    opts: LsqOptions,
+}
+
+/// An accepted step: the new parameters, their residuals and cost.
+struct Step {
+    theta: Vec<f64>,
+    residuals: Vec<f64>,
+    cost: f64,
+}
+
+impl<F> Problem<'_, F>
+where
+    F: Fn(&[f64]) -> Option<Vec<f64>> + Sync,
+{
+    /// `t` within the bounds.
+    fn clamp(&self, t: &mut [f64]) {
+        for (i, x) in t.iter_mut().enumerate() {
+            *x = x.clamp(self.lower[i], self.upper[i]);
+        }
+    }
+
+    /// The residuals at `theta`, `None` when they cannot be computed or are not finite.
+    fn residuals_at(&self, theta: &[f64]) -> Option<Vec<f64>> {
+        (self.residuals)(theta).filter(|r| r.iter().all(|x| x.is_finite()))
+    }
+
+    /// The finite-difference Jacobian at `theta` (residuals `r`), columns in parallel
+    /// when the options ask; `None` when a column cannot be computed.
+    fn jacobian(&self, theta: &[f64], r: &[f64]) -> Option<DMatrix<f64>> {
+        let n = theta.len();
+        let m = r.len();
+        let column = |j: usize| self.column(theta, r, j);
+        let cols: Vec<Option<Vec<f64>>> = if self.opts.parallel {
             (0..n).into_par_iter().map(column).collect()
         } else {
             (0..n).map(column).collect()
@@ -112,48 +165,70 @@ where
             }
         }
         Some(jm)
-    };
-    let mut jm = jacobian(&theta, &r)?;
-    while iterations < opts.max_iterations {
-        iterations += 1;
+    }
+
+    /// Column `j` of the Jacobian: steps inside the bounds, forward first; a parameter
+    /// pinned by its bounds has no column (zeros); a step whose model cannot be simulated
+    /// (a limit of the model's that is not a box bound, such as the solver's reach) is
+    /// taken the other way.
+    fn column(&self, theta: &[f64], r: &[f64], j: usize) -> Option<Vec<f64>> {
+        let h = self.opts.step * theta[j].abs().max(self.scale[j]);
+        let steps = [h, -h]
+            .into_iter()
+            .filter(|s| (self.lower[j]..=self.upper[j]).contains(&(theta[j] + s)));
+        let mut pinned = true;
+        for h in steps {
+            pinned = false;
+            let mut t = theta.to_vec();
+            t[j] += h;
+            if let Some(rp) = self.residuals_at(&t) {
+                return Some(rp.iter().zip(r).map(|(a, b)| (a - b) / h).collect());
+            }
+        }
+        pinned.then(|| vec![0.0; r.len()])
+    }
+
+    /// The first damped Gauss-Newton step from `theta` (Jacobian `jm`, residuals `r`,
+    /// cost `c`) that lowers the cost, raising the damping `lambda` after each one that
+    /// does not and lowering it on success; `None` when [`TRIALS_PER_ITERATION`] fail.
+    fn damped_step(
+        &self,
+        jm: &DMatrix<f64>,
+        theta: &[f64],
+        r: &[f64],
+        c: f64,
+        lambda: &mut f64,
+    ) -> Option<Step> {
+        let n = theta.len();
         let jt = jm.transpose();
-        let jtj = &jt * &jm;
-        let g = &jt * DVector::from_row_slice(&r);
-        let mut improved = false;
-        for _ in 0..12 {
+        let jtj = &jt * jm;
+        let g = &jt * DVector::from_row_slice(r);
+        for _ in 0..TRIALS_PER_ITERATION {
             let mut a = jtj.clone();
             for i in 0..n {
-                a[(i, i)] += lambda * jtj[(i, i)].max(1e-30 / (scale[i] * scale[i]));
+                let floor = DIAGONAL_FLOOR / (self.scale[i] * self.scale[i]);
+                a[(i, i)] += *lambda * jtj[(i, i)].max(floor);
             }
             let Some(delta) = a.lu().solve(&(-&g)) else {
-                lambda *= 10.0;
+                *lambda *= LAMBDA_UP;
                 continue;
             };
             let mut trial: Vec<f64> = (0..n).map(|i| theta[i] + delta[i]).collect();
-            clamp(&mut trial);
-            match residuals(&trial).filter(finite) {
+            self.clamp(&mut trial);
+            match self.residuals_at(&trial) {
                 Some(rt) if cost(&rt) < c => {
-                    let ct = cost(&rt);
-                    let rel = (c - ct) / c.max(1e-300);
-                    theta = trial;
-                    r = rt;
-                    c = ct;
-                    lambda = (lambda * 0.3).max(1e-12);
-                    improved = true;
-                    if rel < opts.tolerance {
-                        return Some(finish(theta, c, m, &jm, iterations));
-                    }
-                    break;
+                    *lambda = (*lambda * LAMBDA_DOWN).max(LAMBDA_MIN);
+                    return Some(Step {
+                        cost: cost(&rt),
+                        theta: trial,
+                        residuals: rt,
+                    });
                 }
-                _ => lambda *= 10.0,
+                _ => *lambda *= LAMBDA_UP,
             }
         }
-        if !improved {
-            break;
-        }
-        jm = jacobian(&theta, &r)?;
+        None
     }
-    Some(finish(theta, c, m, &jm, iterations))
 }
 
 /// Whether the start, bounds and scales make a problem [`minimise`] can run: every value

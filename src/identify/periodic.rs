@@ -28,33 +28,12 @@ pub fn fit_mass_periodic(
             short.iter().map(|s| format!("; {s}")).collect::<String>()
         )));
     }
-    let mut per = Vec::new();
-    let mut sig = Vec::new();
-    for d in &data {
-        let fd: Vec<f64> = match friction {
-            Some(fr) => bouc_wen_path(&d.path, fr.yield_displacement_m, fr.shape, d.v[0].signum())
-                .iter()
-                .map(|z| fr.force_n * z)
-                .collect(),
-            None => vec![0.0; d.x.len()],
-        };
-        // F - F_D - k x = M a + c0 (offset)
-        let a = DMatrix::from_fn(d.a.len(), 2, |i, j| if j == 0 { d.a[i] } else { 1.0 });
-        let b = DVector::from_iterator(
-            d.a.len(),
-            (0..d.a.len()).map(|i| d.f[i] - fd[i] - stiffness * d.x[i]),
-        );
-        let (x, s) = lsq::linear(&a, &b)
-            .ok_or_else(|| IdentifyError::failed(&d.name, "loop-approach fit failed"))?;
-        check_bounds(
-            &d.name,
-            "mass by the loop approach (kg)",
-            x[0],
-            MASS_BOUNDS_KG,
-        )?;
-        per.push(x[0]);
-        sig.push(s[0]);
-    }
+    let (per, sig): (Vec<f64>, Vec<f64>) = data
+        .iter()
+        .map(|d| loop_mass(d, stiffness, friction))
+        .collect::<Result<Vec<_>, _>>()?
+        .into_iter()
+        .unzip();
     let mass = per.iter().sum::<f64>() / per.len() as f64;
     let spread = if per.len() > 1 {
         (per.iter().map(|m| (m - mass).powi(2)).sum::<f64>()
@@ -76,6 +55,36 @@ pub fn fit_mass_periodic(
             .map(|i| d0.f[i] - stiffness * d0.x[i])
             .collect(),
     })
+}
+
+/// The loop approach's mass of one sine `d` and its sigma: `F - F_D - k x = M a + c0`
+/// (an offset `c0`), `F_D` the identified `friction` along the test's path (zero without).
+fn loop_mass(
+    d: &SineData,
+    stiffness: f64,
+    friction: Option<&FrictionFit>,
+) -> Result<(f64, f64), IdentifyError> {
+    let fd: Vec<f64> = match friction {
+        Some(fr) => bouc_wen_path(&d.path, fr.yield_displacement_m, fr.shape, d.v[0].signum())
+            .iter()
+            .map(|z| fr.force_n * z)
+            .collect(),
+        None => vec![0.0; d.x.len()],
+    };
+    let a = DMatrix::from_fn(d.a.len(), 2, |i, j| if j == 0 { d.a[i] } else { 1.0 });
+    let b = DVector::from_iterator(
+        d.a.len(),
+        (0..d.a.len()).map(|i| d.f[i] - fd[i] - stiffness * d.x[i]),
+    );
+    let (x, s) = lsq::linear(&a, &b)
+        .ok_or_else(|| IdentifyError::failed(&d.name, "loop-approach fit failed"))?;
+    check_bounds(
+        &d.name,
+        "mass by the loop approach (kg)",
+        x[0],
+        MASS_BOUNDS_KG,
+    )?;
+    Ok((x[0], s[0]))
 }
 
 /// Start values of the yield displacement tried by the joint fit (the best by linear least

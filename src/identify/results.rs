@@ -231,7 +231,7 @@ pub struct Identification {
     #[serde(skip)]
     pub params: Params,
     /// What could not be identified, and why.
-    pub missing: Vec<String>,
+    pub missing: Vec<super::Missing>,
     /// What the screening of the records found and did.
     pub screening: Vec<Finding>,
     pub welch: WelchOptions,

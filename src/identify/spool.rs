@@ -66,25 +66,96 @@ pub fn spool_response(v: &Servovalve, u: &[f64], sample_rate_hz: f64) -> Vec<f64
     out
 }
 
-/// The valve's free parameters for its model: gain, then its dynamics.
-fn theta_of(v: &Servovalve) -> Vec<f64> {
-    match v.model {
-        ServovalveModel::SecondOrder => vec![v.gain, v.natural_frequency_hz, v.damping_ratio],
-        _ => vec![v.gain, v.time_constant_s],
+/// The valve's parameters the spool fit frees, by its order: the gain and the dynamics
+/// (a second-order valve's natural frequency and damping, any other's time constant).
+/// The one place that lays them out as the least-squares search vector.
+#[derive(Debug, Clone, Copy, PartialEq)]
+enum FreeValve {
+    SecondOrder {
+        gain: f64,
+        natural_frequency_hz: f64,
+        damping_ratio: f64,
+    },
+    TimeConstant {
+        gain: f64,
+        time_constant_s: f64,
+    },
+}
+
+impl FreeValve {
+    /// The free parameters of `v`.
+    fn of(v: &Servovalve) -> FreeValve {
+        match v.model {
+            ServovalveModel::SecondOrder => FreeValve::SecondOrder {
+                gain: v.gain,
+                natural_frequency_hz: v.natural_frequency_hz,
+                damping_ratio: v.damping_ratio,
+            },
+            _ => FreeValve::TimeConstant {
+                gain: v.gain,
+                time_constant_s: v.time_constant_s,
+            },
+        }
+    }
+
+    /// The search vector: gain, then the dynamics.
+    fn to_search(self) -> Vec<f64> {
+        match self {
+            FreeValve::SecondOrder {
+                gain,
+                natural_frequency_hz,
+                damping_ratio,
+            } => vec![gain, natural_frequency_hz, damping_ratio],
+            FreeValve::TimeConstant {
+                gain,
+                time_constant_s,
+            } => vec![gain, time_constant_s],
+        }
+    }
+
+    /// The free parameters of `start`'s order at the search vector `t` ([`Self::to_search`]).
+    fn from_search(start: &Servovalve, t: &[f64]) -> FreeValve {
+        match start.model {
+            ServovalveModel::SecondOrder => FreeValve::SecondOrder {
+                gain: t[0],
+                natural_frequency_hz: t[1],
+                damping_ratio: t[2],
+            },
+            _ => FreeValve::TimeConstant {
+                gain: t[0],
+                time_constant_s: t[1],
+            },
+        }
+    }
+
+    /// `v` with these parameters.
+    fn applied_to(self, v: &Servovalve) -> Servovalve {
+        let mut w = *v;
+        match self {
+            FreeValve::SecondOrder {
+                gain,
+                natural_frequency_hz,
+                damping_ratio,
+            } => {
+                w.gain = gain;
+                w.natural_frequency_hz = natural_frequency_hz;
+                w.damping_ratio = damping_ratio;
+            }
+            FreeValve::TimeConstant {
+                gain,
+                time_constant_s,
+            } => {
+                w.gain = gain;
+                w.time_constant_s = time_constant_s;
+            }
+        }
+        w
     }
 }
 
-fn with_theta(v: &Servovalve, t: &[f64]) -> Servovalve {
-    let mut w = *v;
-    w.gain = t[0];
-    match v.model {
-        ServovalveModel::SecondOrder => {
-            w.natural_frequency_hz = t[1];
-            w.damping_ratio = t[2];
-        }
-        _ => w.time_constant_s = t[1],
-    }
-    w
+/// `start` with its free parameters at the search vector `t`.
+fn with_search(start: &Servovalve, t: &[f64]) -> Servovalve {
+    FreeValve::from_search(start, t).applied_to(start)
 }
 
 /// Refine `start` (its model kept) by output-error least squares of the spool position on
@@ -110,13 +181,13 @@ pub fn refine_servovalve(
     if data.is_empty() {
         return None;
     }
-    let t0 = theta_of(start);
+    let t0 = FreeValve::of(start).to_search();
     let lo: Vec<f64> = t0.iter().map(|x| 0.5 * x).collect();
     let hi: Vec<f64> = t0.iter().map(|x| 2.0 * x).collect();
     let scale: Vec<f64> = t0.iter().map(|x| x.abs().max(1e-6)).collect();
     let fit = minimise(
         |t| {
-            let v = with_theta(start, t);
+            let v = with_search(start, t);
             let mut r = Vec::new();
             for (u, x, rg, fs) in &data {
                 let sim = spool_response(&v, u, *fs);
@@ -135,5 +206,42 @@ pub fn refine_servovalve(
             parallel: true,
         },
     )?;
-    Some(with_theta(start, &fit.theta))
+    Some(with_search(start, &fit.theta))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::campaign::synth::{synthesise, SynthOptions};
+    use crate::params::Params;
+
+    /// From a valve 10 % off in gain and 20 % off in frequency, the output-error fit of
+    /// the simulator's R1 spool (seed 1, 12 s) comes back to the true valve.
+    #[test]
+    fn the_spool_fit_returns_to_the_simulated_valve() {
+        let truth = Params::trees_lab().servovalve;
+        let opts = SynthOptions {
+            random_duration_s: 12.0,
+            tests: Some(vec!["R1".into()]),
+            ..SynthOptions::default()
+        };
+        let c = synthesise(&Params::trees_lab(), &opts, None);
+        let mut start = truth;
+        start.gain *= 1.1;
+        start.natural_frequency_hz *= 0.8;
+        let fs = c.sample_rate_of(0);
+        let v = refine_servovalve(&start, &[(&c.records[0], fs)], |n| 0..n).unwrap();
+        // the spool's noise over 12 s leaves the fit 0.13 %, 0.37 % and 0.7 % off the
+        // gain, frequency and damping: bounds of about three times that
+        let off = |x: f64, truth: f64| (x / truth - 1.0).abs();
+        assert_eq!(v.model, truth.model);
+        assert!(off(v.gain, truth.gain) < 0.005, "{v:?}");
+        assert!(
+            off(v.natural_frequency_hz, truth.natural_frequency_hz) < 0.01,
+            "{v:?}"
+        );
+        assert!(off(v.damping_ratio, truth.damping_ratio) < 0.02, "{v:?}");
+        // the time constant is not the second-order valve's: left as it was
+        assert_eq!(v.time_constant_s, start.time_constant_s);
+    }
 }

@@ -4,8 +4,7 @@
 //! ([`Identification::estimates`], [`crate::identify::greybox::FreeEstimate`]).
 
 use super::page::{Section, Table};
-use crate::identify::greybox::GreyParameter;
-use crate::identify::Identification;
+use crate::identify::{Identification, Quantity};
 use crate::linear::{Linearisation, OilColumn};
 use crate::params::{Params, ServovalveModel};
 use std::fmt::Write as _;
@@ -48,39 +47,43 @@ fn second_order(p: &Params) -> bool {
     p.servovalve.model == ServovalveModel::SecondOrder
 }
 
-/// The table's section-4 estimates (issue 5's JSON keys) and their truths.
-const TABLE_ROWS: [(&str, Truth); 16] = [
-    ("servovalve.gain", |p| Some(p.servovalve.gain)),
-    ("servovalve.time_constant_s", |p| {
-        (!second_order(p)).then_some(p.servovalve.time_constant_s)
-    }),
-    ("servovalve.natural_frequency_hz", |p| {
-        second_order(p).then_some(p.servovalve.natural_frequency_hz)
-    }),
-    ("servovalve.damping_ratio", |p| {
-        second_order(p).then_some(p.servovalve.damping_ratio)
-    }),
-    ("table.mass_kg", |p| Some(p.table.mass_kg)),
-    ("table.mass_random_kg", |p| Some(p.table.mass_kg)),
-    ("table.mass_periodic_kg", |p| Some(p.table.mass_kg)),
-    ("table.stiffness_n_m", |p| Some(p.table.stiffness_n_m)),
-    ("oil_column.frequency_hz", |p| {
-        Some(OilColumn::of(p).frequency_hz)
-    }),
-    ("oil_column.damping_ratio", |p| {
-        Some(OilColumn::of(p).damping_ratio)
-    }),
-    ("oil_column.bulk_modulus_pa", |p| {
-        Some(p.actuator.bulk_modulus_pa)
-    }),
-    ("friction.force_n", |p| Some(p.friction.force_n)),
-    ("friction.yield_displacement_m", |p| {
-        Some(p.friction.yield_displacement_m)
-    }),
-    ("friction.shape", |p| Some(p.friction.shape)),
-    ("validation.table_tf_error", |_| None),
-    ("validation.peak_hz", bare_table_peak_hz),
-];
+/// Whether the summary shows estimates of `q` and how their truth reads: `None` for what
+/// it leaves out (figures of the validation the report shows elsewhere, the leakage the
+/// oil column's damping carries), a truth of `None` where no parameter is the truth (a
+/// device is no parameter of the table). Every quantity is named: a new one must be
+/// placed here.
+fn shown(q: Quantity) -> Option<Truth> {
+    use Quantity::*;
+    let truth: Truth = match q {
+        ServovalveGain => |p| Some(p.servovalve.gain),
+        ServovalveTimeConstant => |p| (!second_order(p)).then_some(p.servovalve.time_constant_s),
+        ServovalveNaturalFrequency => {
+            |p| second_order(p).then_some(p.servovalve.natural_frequency_hz)
+        }
+        ServovalveDampingRatio => |p| second_order(p).then_some(p.servovalve.damping_ratio),
+        Mass | MassRandom | MassPeriodic => |p| Some(p.table.mass_kg),
+        Stiffness => |p| Some(p.table.stiffness_n_m),
+        OilColumnFrequency => |p| Some(OilColumn::of(p).frequency_hz),
+        OilColumnDampingRatio => |p| Some(OilColumn::of(p).damping_ratio),
+        BulkModulus => |p| Some(p.actuator.bulk_modulus_pa),
+        FrictionForce => |p| Some(p.friction.force_n),
+        FrictionYieldDisplacement => |p| Some(p.friction.yield_displacement_m),
+        FrictionShape => |p| Some(p.friction.shape),
+        TableTfError => |_| None,
+        PeakHz => bare_table_peak_hz,
+        TableTfErrorNonlinear | MeasuredPeakHz | Leakage => return None,
+        DeviceForce
+        | DeviceYieldDisplacement
+        | DeviceShape
+        | DeviceViscous
+        | DeviceStiffness
+        | DeviceMass
+        | DeviceOffset
+        | DeviceNrmse
+        | DeviceFitPercent => |_| None,
+    };
+    Some(truth)
+}
 
 /// The peak of the bare table's transfer function (the validation's truth: the
 /// identification models the table without specimen or foundation).
@@ -95,37 +98,27 @@ fn bare_table_peak_hz(p: &Params) -> Option<f64> {
 /// displacement and force, and the closed loop's fitted parameters (prefixed
 /// `closed_loop:`), each with the truth where `truth` gives it.
 pub fn summary_rows(id: &Identification, truth: Option<&Params>) -> Vec<Row> {
-    let estimates = id.estimates();
-    let row = |key: &str, truth: Option<f64>| {
-        let e = estimates.iter().find(|e| e.key == key);
-        Row {
-            key: key.to_string(),
-            value: e.and_then(|e| e.value).filter(|v| v.is_finite()),
-            sigma: e.and_then(|e| e.sigma).filter(|s| s.is_finite()),
-            truth,
-        }
-    };
-    let mut rows: Vec<Row> = TABLE_ROWS
-        .iter()
-        .map(|(key, t)| row(key, truth.and_then(t)))
+    let mut rows: Vec<Row> = id
+        .estimates()
+        .into_iter()
+        // the device's only when a device was fitted
+        .filter(|e| id.device.is_some() || !e.quantity.is_device())
+        .filter_map(|e| {
+            let t = shown(e.quantity)?;
+            Some(Row {
+                key: e.key().to_string(),
+                value: e.value.filter(|v| v.is_finite()),
+                sigma: e.sigma.filter(|s| s.is_finite()),
+                truth: truth.and_then(t),
+            })
+        })
         .collect();
-    // the device's (no truth: a device is no parameter of the table)
-    if id.device.is_some() {
-        let device = estimates.iter().filter(|e| e.key.starts_with("device."));
-        rows.extend(device.map(|e| row(e.key, None)));
-    }
     if let Some(cl) = &id.closed_loop {
-        rows.extend(cl.estimates.iter().map(|e| {
-            Row {
-                key: format!("closed_loop: {}", e.key),
-                value: Some(e.value),
-                sigma: e.sigma,
-                truth: GreyParameter::ALL
-                    .iter()
-                    .find(|g| g.key() == e.key)
-                    .zip(truth)
-                    .map(|(g, p)| g.get(p)),
-            }
+        rows.extend(cl.estimates.iter().map(|e| Row {
+            key: format!("closed_loop: {}", e.key),
+            value: Some(e.value),
+            sigma: e.sigma,
+            truth: truth.map(|p| e.parameter.get(p)),
         }));
     }
     rows
@@ -231,17 +224,33 @@ mod tests {
         };
         let id = crate::identify::identify(&synthesise(&Params::trees_lab(), &opts, None));
         let rows = summary_rows(&id, Some(&Params::trees_lab()));
-        for r in rows.iter().filter(|r| !r.key.starts_with("closed_loop: ")) {
-            assert!(
-                id.estimate(&r.key).is_some(),
-                "{} is not an estimate",
-                r.key
-            );
-        }
+        let keys: Vec<&str> = rows.iter().map(|r| r.key.as_str()).collect();
+        // section 4's sixteen in the report's order, then the device's, then the closed loop's
+        assert_eq!(
+            keys[..3],
+            [
+                "servovalve.gain",
+                "servovalve.time_constant_s",
+                "servovalve.natural_frequency_hz"
+            ]
+        );
+        assert_eq!(
+            keys[14..16],
+            ["validation.table_tf_error", "validation.peak_hz"]
+        );
+        let device = keys.iter().filter(|k| k.starts_with("device.")).count();
+        assert_eq!(device, if id.device.is_some() { 9 } else { 0 });
+        assert!(keys[16 + device..]
+            .iter()
+            .all(|k| k.starts_with("closed_loop: ")));
         let mass = rows
             .iter()
             .find(|r| r.key == "table.mass_random_kg")
             .unwrap();
+        assert_eq!(
+            mass.value,
+            id.estimate_of(Quantity::MassRandom).and_then(|e| e.value)
+        );
         assert!(
             (mass.value.unwrap() / 41_258.0 - 1.0).abs() < 0.05,
             "{:?}",

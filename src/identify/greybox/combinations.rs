@@ -26,81 +26,85 @@ pub const INSEPARABLE_CORRELATION: f64 = 0.95;
 
 type Formula = fn(&Params) -> f64;
 
-/// Every combination: name, unit, meaning, formula, and the free parameters it needs
-/// (reported only when the fit freed one of them).
-fn catalogue() -> Vec<(
-    &'static str,
-    &'static str,
-    &'static str,
-    Formula,
-    &'static [GreyParameter],
-)> {
+/// One identifiable combination of the catalogue.
+struct Entry {
+    name: &'static str,
+    unit: &'static str,
+    meaning: &'static str,
+    formula: Formula,
+    /// The free parameters it involves (reported only when the fit freed one of them).
+    needs: &'static [GreyParameter],
+}
+
+/// Every combination.
+const CATALOGUE: [Entry; 8] = {
     use GreyParameter::*;
-    vec![
-        (
-            "loop_gain_1_s",
-            "1/s",
-            "Kp Ks Kq / A: the displacement loop's gain (its bandwidth is loop_gain / 2 pi)",
-            |p| {
+    [
+        Entry {
+            name: "loop_gain_1_s",
+            unit: "1/s",
+            meaning:
+                "Kp Ks Kq / A: the displacement loop's gain (its bandwidth is loop_gain / 2 pi)",
+            formula: |p| {
                 p.controller.kp * p.servovalve.gain * p.actuator.flow_gain_m3_s
                     / p.actuator.piston_area_m2
             },
-            &[DisplacementGain, FlowGain],
-        ),
-        (
-            "feed_forward_ratio",
-            "1",
-            "Fv Ks Kq / A: the share of the reference velocity fed forward to the valve",
-            |p| {
+            needs: &[DisplacementGain, FlowGain],
+        },
+        Entry {
+            name: "feed_forward_ratio",
+            unit: "1",
+            meaning: "Fv Ks Kq / A: the share of the reference velocity fed forward to the valve",
+            formula: |p| {
                 p.controller.fv * p.servovalve.gain * p.actuator.flow_gain_m3_s
                     / p.actuator.piston_area_m2
             },
-            &[VelocityFeedForward, FlowGain],
-        ),
-        (
-            "oil_column_frequency_hz",
-            "Hz",
-            "sqrt(4 beta A^2 / (V_t M)) / 2 pi (spec section 4)",
-            |p| OilColumn::of(p).frequency_hz,
-            &[BulkModulus, TableMass],
-        ),
-        (
-            "oil_column_damping_ratio",
-            "1",
-            "(C_l / A) sqrt(beta M / V_t) (spec section 4)",
-            |p| OilColumn::of(p).damping_ratio,
-            &[BulkModulus, Leakage, TableMass],
-        ),
-        (
-            "valve_bandwidth_hz",
-            "Hz",
-            "1 / (2 pi tau) of the first-order valve",
-            |p| 1.0 / (2.0 * PI * p.servovalve.time_constant_s),
-            &[ValveTimeConstant],
-        ),
-        (
-            "valve_natural_frequency_hz",
-            "Hz",
-            "natural frequency of the second-order valve (paper eq. 4.2)",
-            |p| p.servovalve.natural_frequency_hz,
-            &[ValveNaturalFrequency],
-        ),
-        (
-            "valve_damping_ratio",
-            "1",
-            "damping ratio of the second-order valve (paper eq. 4.2)",
-            |p| p.servovalve.damping_ratio,
-            &[ValveDamping],
-        ),
-        (
-            "friction_per_mass_m_s2",
-            "m/s^2",
-            "F_mu / M: the friction's deceleration of the moving mass",
-            |p| p.friction.force_n / p.table.mass_kg,
-            &[FrictionForce],
-        ),
+            needs: &[VelocityFeedForward, FlowGain],
+        },
+        Entry {
+            name: "oil_column_frequency_hz",
+            unit: "Hz",
+            meaning: "sqrt(4 beta A^2 / (V_t M)) / 2 pi (spec section 4)",
+            formula: |p| OilColumn::of(p).frequency_hz,
+            needs: &[BulkModulus, TableMass],
+        },
+        Entry {
+            name: "oil_column_damping_ratio",
+            unit: "1",
+            meaning: "(C_l / A) sqrt(beta M / V_t) (spec section 4)",
+            formula: |p| OilColumn::of(p).damping_ratio,
+            needs: &[BulkModulus, Leakage, TableMass],
+        },
+        Entry {
+            name: "valve_bandwidth_hz",
+            unit: "Hz",
+            meaning: "1 / (2 pi tau) of the first-order valve",
+            formula: |p| 1.0 / (2.0 * PI * p.servovalve.time_constant_s),
+            needs: &[ValveTimeConstant],
+        },
+        Entry {
+            name: "valve_natural_frequency_hz",
+            unit: "Hz",
+            meaning: "natural frequency of the second-order valve (paper eq. 4.2)",
+            formula: |p| p.servovalve.natural_frequency_hz,
+            needs: &[ValveNaturalFrequency],
+        },
+        Entry {
+            name: "valve_damping_ratio",
+            unit: "1",
+            meaning: "damping ratio of the second-order valve (paper eq. 4.2)",
+            formula: |p| p.servovalve.damping_ratio,
+            needs: &[ValveDamping],
+        },
+        Entry {
+            name: "friction_per_mass_m_s2",
+            unit: "m/s^2",
+            meaning: "F_mu / M: the friction's deceleration of the moving mass",
+            formula: |p| p.friction.force_n / p.table.mass_kg,
+            needs: &[FrictionForce],
+        },
     ]
-}
+};
 
 /// The combinations that involve a free parameter, at `p` (the fitted parameters), with
 /// their sigma from the covariance `cov` of the search coordinates (`None` when the fit
@@ -111,15 +115,16 @@ pub fn combinations(
     cov: Option<&DMatrix<f64>>,
 ) -> Vec<Combination> {
     let theta: Vec<f64> = free.iter().map(|g| g.to_search(g.get(p))).collect();
-    catalogue()
-        .into_iter()
-        .filter(|(.., needs)| needs.iter().any(|n| free.contains(n)))
-        .map(|(name, unit, meaning, f, _)| Combination {
-            name,
-            unit,
-            value: f(p),
-            sigma: cov.and_then(|c| propagate(|t| f(&with_search(p, free, t)), &theta, c)),
-            meaning,
+    CATALOGUE
+        .iter()
+        .filter(|e| e.needs.iter().any(|n| free.contains(n)))
+        .map(|e| Combination {
+            name: e.name,
+            unit: e.unit,
+            value: (e.formula)(p),
+            sigma: cov
+                .and_then(|c| propagate(|t| (e.formula)(&with_search(p, free, t)), &theta, c)),
+            meaning: e.meaning,
         })
         .collect()
 }

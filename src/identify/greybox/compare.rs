@@ -132,14 +132,34 @@ fn trace(
     }
 }
 
+/// A test's simulation stopped before the test's end: it left the envelope or diverged.
+#[derive(Debug, Clone, PartialEq, thiserror::Error)]
+#[error("{test}: the simulation stopped at {time_s:.3} s: {reason}")]
+pub struct SimulationStopped {
+    pub test: String,
+    /// When it stopped, seconds from the test's first sample.
+    pub time_s: f64,
+    /// Why ([`crate::solver::Stop::reason`]).
+    pub reason: String,
+}
+
 /// Test `i` simulated with `p` as it was run: the test's controller override applied to
 /// `p`'s gains, the table starting at rest at the reference's first displacement.
 /// `Err` with the time and reason when the run left the envelope.
-pub fn simulate_as_run(p: &Params, c: &Campaign, i: usize) -> Result<Vec<Outputs>, String> {
+pub fn simulate_test(
+    p: &Params,
+    c: &Campaign,
+    i: usize,
+) -> Result<Vec<Outputs>, SimulationStopped> {
     simulate_prefix(p, c, i, c.records[i].len(), Checks::Envelope)
 }
 
-/// [`simulate_as_run`] over the first `samples` samples only, stopping on `checks` (the
+/// [`simulate_test`] with the reason as text, for the callers that keep only the text.
+pub fn simulate_as_run(p: &Params, c: &Campaign, i: usize) -> Result<Vec<Outputs>, String> {
+    simulate_test(p, c, i).map_err(|e| e.to_string())
+}
+
+/// [`simulate_test`] over the first `samples` samples only, stopping on `checks` (the
 /// fit's trial models may pass the envelope on their way to the data, as the
 /// diagnosis' do; what is reported is held to it).
 pub fn simulate_prefix(
@@ -148,7 +168,7 @@ pub fn simulate_prefix(
     i: usize,
     samples: usize,
     checks: Checks,
-) -> Result<Vec<Outputs>, String> {
+) -> Result<Vec<Outputs>, SimulationStopped> {
     let run = TestRun::new(p, c, i, samples);
     let out = simulate_run_with(
         &run.model,
@@ -169,7 +189,7 @@ pub fn simulate_prefix_pair(
     c: &Campaign,
     [(i, n), (j, m)]: [(usize, usize); 2],
     checks: Checks,
-) -> [Result<Vec<Outputs>, String>; 2] {
+) -> [Result<Vec<Outputs>, SimulationStopped>; 2] {
     let fs = c.sample_rate_of(i);
     if fs != c.sample_rate_of(j) {
         return [
@@ -188,7 +208,7 @@ pub fn simulate_prefix_pair(
     [a.outputs(c, ra), b.outputs(c, rb)]
 }
 
-/// Test `i` prepared to be simulated as it was run (see [`simulate_as_run`]).
+/// Test `i` prepared to be simulated as it was run (see [`simulate_test`]).
 struct TestRun {
     test: usize,
     /// The model with the test's controller override.
@@ -225,12 +245,13 @@ impl TestRun {
 
     /// The run's outputs with the displacement back about the reference's first value,
     /// or when and why it stopped.
-    fn outputs(&self, c: &Campaign, run: Run) -> Result<Vec<Outputs>, String> {
+    fn outputs(&self, c: &Campaign, run: Run) -> Result<Vec<Outputs>, SimulationStopped> {
         if let Some(stop) = run.stop {
-            return Err(format!(
-                "{}: the simulation stopped at {:.3} s: {}",
-                c.info.tests[self.test].name, stop.time_s, stop.reason
-            ));
+            return Err(SimulationStopped {
+                test: c.info.tests[self.test].name.clone(),
+                time_s: stop.time_s,
+                reason: stop.reason,
+            });
         }
         let mut out = run.outputs;
         for o in &mut out {
@@ -287,16 +308,16 @@ pub fn compare(
     tests: &[(usize, Role)],
     channels: &[Measured],
 ) -> Comparison {
-    let runs: Vec<(usize, Role, Result<Vec<Outputs>, String>)> = tests
+    let runs: Vec<(usize, Role, Result<Vec<Outputs>, SimulationStopped>)> = tests
         .par_iter()
-        .map(|&(i, role)| (i, role, simulate_as_run(p, c, i)))
+        .map(|&(i, role)| (i, role, simulate_test(p, c, i)))
         .collect();
     let mut out = Comparison::default();
     for (i, role, run) in runs {
         let sim = match run {
             Ok(s) => s,
             Err(e) => {
-                out.stopped.push(e);
+                out.stopped.push(e.to_string());
                 continue;
             }
         };

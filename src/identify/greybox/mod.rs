@@ -70,6 +70,9 @@ const TOLERANCE: f64 = 1e-5;
 /// A freed parameter's estimate.
 #[derive(Debug, Clone, Serialize)]
 pub struct FreeEstimate {
+    /// The parameter estimated (the JSON names it by its key).
+    #[serde(skip)]
+    pub parameter: GreyParameter,
     pub key: &'static str,
     pub value: f64,
     /// One sigma, widened for the residuals' correlation; `None` when the covariance is
@@ -244,26 +247,7 @@ fn finish(
         .map(|r| correlation_factor(&r, MAX_CORRELATION_LAG))
         .unwrap_or(1.0);
     let cov = fit.covariance.as_ref().map(|m| m * factor);
-    let estimates = s
-        .free
-        .iter()
-        .enumerate()
-        .map(|(j, g)| {
-            let value = g.get(&params);
-            let [lo, hi] = g.bounds(&params);
-            let tol = 1e-6 * (hi - lo).abs().min(value.abs().max(1e-300));
-            FreeEstimate {
-                key: g.key(),
-                value,
-                sigma: cov.as_ref().and_then(|m| {
-                    let sd = m[(j, j)].sqrt();
-                    let sd = if g.logarithmic() { sd * value } else { sd };
-                    sd.is_finite().then_some(sd)
-                }),
-                at_bound: (value - lo).abs() <= tol || (hi - value).abs() <= tol,
-            }
-        })
-        .collect();
+    let estimates = free_estimates(&s.free, &params, cov.as_ref());
     let roles: Vec<(usize, Role)> = estimation
         .iter()
         .map(|&i| (i, Role::Estimation))
@@ -295,6 +279,35 @@ fn finish(
         valve_order: None,
         params,
     }
+}
+
+/// Each free parameter's value in `params`, with its sigma from the covariance `cov` of
+/// the search coordinates (scaled back for a logarithmic one) and whether it sits at a
+/// bound (within a millionth of its range or value).
+fn free_estimates(
+    free: &[GreyParameter],
+    params: &Params,
+    cov: Option<&nalgebra::DMatrix<f64>>,
+) -> Vec<FreeEstimate> {
+    free.iter()
+        .enumerate()
+        .map(|(j, g)| {
+            let value = g.get(params);
+            let [lo, hi] = g.bounds(params);
+            let tol = 1e-6 * (hi - lo).abs().min(value.abs().max(1e-300));
+            FreeEstimate {
+                parameter: *g,
+                key: g.key(),
+                value,
+                sigma: cov.and_then(|m| {
+                    let sd = m[(j, j)].sqrt();
+                    let sd = if g.logarithmic() { sd * value } else { sd };
+                    sd.is_finite().then_some(sd)
+                }),
+                at_bound: (value - lo).abs() <= tol || (hi - value).abs() <= tol,
+            }
+        })
+        .collect()
 }
 
 /// The starts: the loop gain and valve from the measured bandwidth, and one start per
@@ -438,7 +451,8 @@ fn why_not(p: &Params, c: &Campaign, tests: &[usize]) -> String {
     }
     tests
         .iter()
-        .find_map(|&i| compare::simulate_as_run(p, c, i).err())
+        .find_map(|&i| compare::simulate_test(p, c, i).err())
+        .map(|e| e.to_string())
         .unwrap_or_else(|| "a residual was not finite".to_string())
 }
 

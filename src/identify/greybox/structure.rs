@@ -70,88 +70,146 @@ const YIELD_KEPT: &str = "without a force channel the friction's yield displacem
 /// The fit's structure for `p` (the section-4 results and the campaign's keys applied,
 /// defaults elsewhere) on campaign `c`, whose tests `tests` take part.
 pub fn choose(p: &mut Params, c: &Campaign, tests: &[usize], known: Known) -> Structure {
-    use GreyParameter::*;
     let gains = &c.info.controller;
-    let g = &c.info.geometry;
     let with_force = tests
         .iter()
         .any(|&i| c.records[i].measured(Measured::Force).is_some());
-    let mut free = Vec::new();
-    let mut conventions = Vec::new();
-    let mut convention = |key, value, reason| conventions.push(Convention { key, value, reason });
-    // the loop gain: Kp if unknown, else the flow gain if unknown
-    if gains.kp.is_none() {
-        free.push(DisplacementGain);
-    } else if g.flow_gain_m3_s.is_none() {
-        free.push(FlowGain);
-    }
-    if gains.fv.is_none() {
-        p.controller.fv = 0.0;
-        free.push(VelocityFeedForward);
-    }
-    zero_unknown_gains(p, gains, &mut convention);
+    let mut s = Structure {
+        free: Vec::new(),
+        conventions: Vec::new(),
+        with_force,
+    };
+    s.free_the_loop_gains(p, c);
+    s.zero_unknown_gains(p, gains);
     if !known.servovalve {
-        p.servovalve.model = ServovalveModel::FirstOrder;
-        p.servovalve.gain = 1.0;
-        free.push(ValveTimeConstant);
-        convention("servovalve.gain", 1.0, VALVE_FIRST_ORDER);
+        s.free_the_valve(p);
     }
     if !known.oil_column {
-        free.extend([BulkModulus, Leakage]);
+        s.free
+            .extend([GreyParameter::BulkModulus, GreyParameter::Leakage]);
     }
-    if !known.mass && mass_separable(with_force, gains) {
-        free.push(TableMass);
-    } else if !known.mass {
-        convention("table.mass_kg", p.table.mass_kg, NOT_SEPARABLE_MASS);
+    if !known.mass {
+        s.free_or_hold_the_mass(p, gains);
     }
     if !known.friction {
-        free.push(FrictionForce);
-        convention("friction.shape", p.friction.shape, SHAPE_KEPT);
-        if with_force {
-            free.push(YieldDisplacement);
+        s.free_the_friction(p);
+    }
+    s.hold_the_unknown_geometry(p, c);
+    s
+}
+
+impl Structure {
+    /// Hold parameter `key` at `value` for `reason`.
+    fn hold(&mut self, key: &'static str, value: f64, reason: &'static str) {
+        self.conventions.push(Convention { key, value, reason });
+    }
+
+    /// The loop gain (Kp if unknown, else the flow gain if unknown) and, if unknown, the
+    /// velocity feed-forward (from zero).
+    fn free_the_loop_gains(&mut self, p: &mut Params, c: &Campaign) {
+        use GreyParameter::*;
+        let gains = &c.info.controller;
+        if gains.kp.is_none() {
+            self.free.push(DisplacementGain);
+        } else if c.info.geometry.flow_gain_m3_s.is_none() {
+            self.free.push(FlowGain);
+        }
+        if gains.fv.is_none() {
+            p.controller.fv = 0.0;
+            self.free.push(VelocityFeedForward);
+        }
+    }
+
+    /// The unknown gains the fit does not free (Kv, Ka, Fa, Kdp): zero, listed. Kdp's
+    /// damping of the oil column is then carried by the leakage (the same flow per unit
+    /// load pressure, without the valve's lag; freeing both left the loop gain in a
+    /// valley of the cost on synthetic tables with a delta-P feedback).
+    fn zero_unknown_gains(&mut self, p: &mut Params, gains: &ControllerOverride) {
+        let k = &mut p.controller;
+        for (key, given, slot) in [
+            ("controller.kv", gains.kv, &mut k.kv),
+            ("controller.ka", gains.ka, &mut k.ka),
+            ("controller.fa", gains.fa, &mut k.fa),
+            ("controller.kdp", gains.kdp, &mut k.kdp),
+        ] {
+            if given.is_none() {
+                *slot = 0.0;
+                self.hold(key, 0.0, GAIN_FIXED_ZERO);
+            }
+        }
+    }
+
+    /// A valve section 4 could not identify: first order with its time constant free,
+    /// unit gain held.
+    fn free_the_valve(&mut self, p: &mut Params) {
+        p.servovalve.model = ServovalveModel::FirstOrder;
+        p.servovalve.gain = 1.0;
+        self.free.push(GreyParameter::ValveTimeConstant);
+        self.hold("servovalve.gain", 1.0, VALVE_FIRST_ORDER);
+    }
+
+    /// An unknown mass: free where the motion separates it ([`mass_separable`]), else
+    /// held as the scale.
+    fn free_or_hold_the_mass(&mut self, p: &Params, gains: &ControllerOverride) {
+        if mass_separable(self.with_force, gains) {
+            self.free.push(GreyParameter::TableMass);
         } else {
-            convention(
+            self.hold("table.mass_kg", p.table.mass_kg, NOT_SEPARABLE_MASS);
+        }
+    }
+
+    /// Unknown friction: its force free, its shape held, its yield displacement free
+    /// only with a force channel.
+    fn free_the_friction(&mut self, p: &Params) {
+        use GreyParameter::*;
+        self.free.push(FrictionForce);
+        self.hold("friction.shape", p.friction.shape, SHAPE_KEPT);
+        if self.with_force {
+            self.free.push(YieldDisplacement);
+        } else {
+            self.hold(
                 "friction.yield_displacement_m",
                 p.friction.yield_displacement_m,
                 YIELD_KEPT,
             );
         }
     }
-    if g.supply_pressure_pa.is_none() {
-        p.actuator.supply_pressure_pa = SUPPLY_PRESSURE_CONVENTION_PA;
-        convention(
-            "actuator.supply_pressure_pa",
-            SUPPLY_PRESSURE_CONVENTION_PA,
-            SUPPLY_PRESSURE_UNKNOWN,
-        );
-    }
-    let geometry = [
-        (
-            "actuator.piston_area_m2",
-            g.piston_area_m2,
-            p.actuator.piston_area_m2,
-        ),
-        (
-            "actuator.total_oil_volume_m3",
-            g.total_oil_volume_m3,
-            p.actuator.total_oil_volume_m3,
-        ),
-        (
-            "actuator.flow_gain_m3_s",
-            g.flow_gain_m3_s,
-            p.actuator.flow_gain_m3_s,
-        ),
-    ];
-    for (key, given, value) in geometry {
-        let freed = free.iter().any(|f| f.key() == key);
-        if given.is_none() && !freed {
-            convention(key, value, NOT_SEPARABLE_GEOMETRY);
+
+    /// The geometry the campaign does not give and the fit does not free: the supply
+    /// pressure at its convention, the others at their values as the scale.
+    fn hold_the_unknown_geometry(&mut self, p: &mut Params, c: &Campaign) {
+        let g = &c.info.geometry;
+        if g.supply_pressure_pa.is_none() {
+            p.actuator.supply_pressure_pa = SUPPLY_PRESSURE_CONVENTION_PA;
+            self.hold(
+                "actuator.supply_pressure_pa",
+                SUPPLY_PRESSURE_CONVENTION_PA,
+                SUPPLY_PRESSURE_UNKNOWN,
+            );
         }
-    }
-    Structure {
-        free,
-        conventions,
-        with_force,
+        let geometry = [
+            (
+                "actuator.piston_area_m2",
+                g.piston_area_m2,
+                p.actuator.piston_area_m2,
+            ),
+            (
+                "actuator.total_oil_volume_m3",
+                g.total_oil_volume_m3,
+                p.actuator.total_oil_volume_m3,
+            ),
+            (
+                "actuator.flow_gain_m3_s",
+                g.flow_gain_m3_s,
+                p.actuator.flow_gain_m3_s,
+            ),
+        ];
+        for (key, given, value) in geometry {
+            let freed = self.free.iter().any(|f| f.key() == key);
+            if given.is_none() && !freed {
+                self.hold(key, value, NOT_SEPARABLE_GEOMETRY);
+            }
+        }
     }
 }
 
@@ -189,28 +247,5 @@ impl Structure {
             conventions,
             with_force: self.with_force,
         })
-    }
-}
-
-/// The unknown gains the fit does not free (Kv, Ka, Fa, Kdp): zero, listed. Kdp's
-/// damping of the oil column is then carried by the leakage (the same flow per unit load
-/// pressure, without the valve's lag; freeing both left the loop gain in a valley of the
-/// cost on synthetic tables with a delta-P feedback).
-fn zero_unknown_gains(
-    p: &mut Params,
-    gains: &ControllerOverride,
-    convention: &mut impl FnMut(&'static str, f64, &'static str),
-) {
-    let k = &mut p.controller;
-    for (key, given, slot) in [
-        ("controller.kv", gains.kv, &mut k.kv),
-        ("controller.ka", gains.ka, &mut k.ka),
-        ("controller.fa", gains.fa, &mut k.fa),
-        ("controller.kdp", gains.kdp, &mut k.kdp),
-    ] {
-        if given.is_none() {
-            *slot = 0.0;
-            convention(key, 0.0, GAIN_FIXED_ZERO);
-        }
     }
 }
