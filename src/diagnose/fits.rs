@@ -8,7 +8,7 @@ use super::part::Part;
 use super::residuals::noise::median;
 use crate::campaign::{Campaign, Measured};
 use crate::identify::greybox::compare::{
-    noise_ceiling, nrmse, simulate_as_run, simulated, COMPARED,
+    noise_ceiling, nrmse, simulate_test, simulated, SimulationStopped, COMPARED,
 };
 use crate::identify::signals::centred_rms;
 use crate::params::Params;
@@ -34,7 +34,7 @@ pub struct ModelFit {
 
 /// Fit % of `run` against the measured channel `m` (`meas`) over `range`.
 fn quarter_fit(
-    run: &Result<Vec<Outputs>, String>,
+    run: &Result<Vec<Outputs>, SimulationStopped>,
     meas: &[f64],
     range: Range<usize>,
     m: Measured,
@@ -46,9 +46,9 @@ fn quarter_fit(
 
 /// [`ModelFit`]s of test `i` of `c`, every channel it recorded.
 fn test_fits(baseline: &Params, extended: &Params, c: &Campaign, i: usize) -> Vec<ModelFit> {
-    let base = simulate_as_run(baseline, c, i);
+    let base = simulate_test(baseline, c, i);
     // without a cause the extended model is the baseline: one run serves both
-    let ext = (extended != baseline).then(|| simulate_as_run(extended, c, i));
+    let ext = (extended != baseline).then(|| simulate_test(extended, c, i));
     let r = &c.records[i];
     let range = Part::Report.range(r.len());
     let rest = c.rest_segment(i);
