@@ -166,6 +166,37 @@ impl Actuator {
     pub fn oil_column_stiffness_n_m(&self) -> f64 {
         4.0 * self.bulk_modulus_pa * self.piston_area_m2.powi(2) / self.total_oil_volume_m3
     }
+
+    /// Bulk modulus giving the oil column `stiffness_n_m`: `k_oil V_t / (4 A^2)` (4.1.3), Pa.
+    pub fn bulk_modulus_for_stiffness_pa(&self, stiffness_n_m: f64) -> f64 {
+        stiffness_n_m * self.total_oil_volume_m3 / (4.0 * self.piston_area_m2 * self.piston_area_m2)
+    }
+
+    /// Bulk modulus putting the oil column of mass `mass_kg` at `frequency_hz` (4.1.3), Pa.
+    pub fn bulk_modulus_for_frequency_pa(&self, frequency_hz: f64, mass_kg: f64) -> f64 {
+        let w = 2.0 * std::f64::consts::PI * frequency_hz;
+        self.bulk_modulus_for_stiffness_pa(w.powi(2) * mass_kg)
+    }
+
+    /// Oil-column damping ratio `(C_l / A) sqrt(beta M / V_t)`, mass `mass_kg` (spec 4).
+    pub fn oil_column_damping_ratio(&self, mass_kg: f64) -> f64 {
+        self.leakage_m3_s_pa / self.piston_area_m2 * self.damping_scale(mass_kg)
+    }
+
+    /// Leakage giving `damping_ratio` at mass `mass_kg`: `zeta A / sqrt(beta M / V_t)`.
+    pub fn leakage_for_damping_ratio_m3_s_pa(&self, mass_kg: f64, damping_ratio: f64) -> f64 {
+        damping_ratio * self.piston_area_m2 / self.damping_scale(mass_kg)
+    }
+
+    /// `sqrt(beta M / V_t)`: the oil column's damping ratio per unit `C_l / A`.
+    fn damping_scale(&self, mass_kg: f64) -> f64 {
+        (self.bulk_modulus_pa * mass_kg / self.total_oil_volume_m3).sqrt()
+    }
+
+    /// `4 beta / V_t`: the ideal actuator's load-pressure rate per unit flow, Pa/m^3.
+    pub fn pressure_rate_pa_m3(&self) -> f64 {
+        4.0 * self.bulk_modulus_pa / self.total_oil_volume_m3
+    }
 }
 
 /// Rigid table (payload) mass and horizontal stiffness (spec section 5).

@@ -140,16 +140,38 @@ impl BaselineParameter {
     /// gain is freed only when unknown, as widely as the table's parameters then.
     fn refinement_width(self) -> Option<f64> {
         match self {
-            TableMass => Some(0.15),
-            BulkModulus => Some(0.3),
-            Leakage => Some(0.9),
-            FrictionForce | YieldDisplacement | FrictionShape => Some(0.5),
-            FlowGain => Some(0.05),
-            ValveGain | ValveFrequency | ValveDamping | ValveTimeConstant => Some(0.1),
+            TableMass => Some(width::TABLE_MASS),
+            BulkModulus => Some(width::BULK_MODULUS),
+            Leakage => Some(width::LEAKAGE),
+            FrictionForce | YieldDisplacement | FrictionShape => Some(width::FRICTION),
+            FlowGain => Some(width::FLOW_GAIN),
+            ValveGain | ValveFrequency | ValveDamping | ValveTimeConstant => Some(width::VALVE),
             DisplacementGain => Some(CANDIDATE_WIDTH),
             TableStiffness | VelocityFeedForward | DeltaPGain => None,
         }
     }
+}
+
+/// Relative half-widths of the baseline's refinement
+/// ([`BaselineParameter::refinement_width`]; [`range_within`] reads a width of 0.5 or more
+/// as "up to twice the value", and frees the leakage and the friction down to zero).
+mod width {
+    /// The table mass: five times the paper's 3 % precision of the mass estimate.
+    pub const TABLE_MASS: f64 = 0.15;
+    /// The bulk modulus: three times the paper's 10 % precision of the oil column.
+    pub const BULK_MODULUS: f64 = 0.3;
+    /// The leakage: zero to twice its estimate (as any width of 0.5 or more gives it:
+    /// [`super::range_within`]); section 4 reads it only through the oil column's damping.
+    pub const LEAKAGE: f64 = 0.9;
+    /// The friction amplitude, yield displacement and shape: zero (amplitude and shape)
+    /// or half to twice the section-4 estimate.
+    pub const FRICTION: f64 = 0.5;
+    /// The flow gain Kq: the lab's nominal value, moved by at most 5 % (its error shows in
+    /// the fast sines' displacement at several noise RMS for 1e-4: [`super::REFINED`]).
+    pub const FLOW_GAIN: f64 = 0.05;
+    /// The valve's gain and dynamics: within 10 % of the spool fit
+    /// ([`super::valve_dynamics`]).
+    pub const VALVE: f64 = 0.1;
 }
 
 /// Copy every baseline parameter of `from` into `to` (nothing else).
@@ -439,84 +461,151 @@ pub(super) fn refine_output_error(
     whitening: &Whitening,
     iterations: usize,
 ) -> Option<Refined> {
-    // without a force channel the friction's yield and shape, and a centring spring, are
-    // not separable in the motion from the friction amplitude and the oil column (the
-    // closed-loop fit keeps them): freed, they leave the fit crawling along those valleys
+    let free = refinement_free(c, p0);
+    let ranges: Vec<Range> = free.iter().map(|&w| refinement_range(p0, w, c)).collect();
+    let refinement = Refinement {
+        p0,
+        effects: FreedEffects::new(effects, table),
+        free,
+    };
+    let e = &refinement.effects;
+    let join = |a: &[f64], b: Vec<f64>| -> Vec<f64> { a.iter().copied().chain(b).collect() };
+    let of = |f: fn(&Range) -> f64| ranges.iter().map(f).collect::<Vec<f64>>();
+    let start: Vec<f64> = refinement.free.iter().map(|w| w.get(p0)).collect();
+    let escale: Vec<f64> = e
+        .start
+        .iter()
+        .map(|x| x.abs().max(EFFECT_SCALE_FLOOR))
+        .collect();
+    let fit = minimise(
+        |t| residual_vector(&refinement.params(t), c, tests, whitening),
+        &join(&e.start, start),
+        &join(&e.lower, of(|r| r.lower)),
+        &join(&e.upper, of(|r| r.upper)),
+        &join(&escale, of(|r| r.scale)),
+        LsqOptions {
+            max_iterations: iterations,
+            tolerance: REFINEMENT_TOLERANCE,
+            step: REFINEMENT_STEP,
+            parallel: false,
+        },
+    )?;
+    let ne = e.start.len();
+    if super::trace_enabled() {
+        trace_ranges(p0, &refinement.free, &ranges, &fit.theta[ne..]);
+    }
+    Some(Refined {
+        cost: fit.cost,
+        params: refinement.params(&fit.theta),
+        iterations: fit.iterations,
+        effect_sigma: fit.sigma[..ne].to_vec(),
+        effect_bounds: (e.lower.clone(), e.upper.clone()),
+    })
+}
+
+/// The refinement stops at a step gaining less than this share of its cost: the baseline
+/// is fitted to its noise (a flow gain 1e-4 off already shows), and the iteration cap
+/// stops a baseline that lacks an effect.
+const REFINEMENT_TOLERANCE: f64 = 1e-6;
+/// Relative finite-difference step of the refinement's Jacobian.
+const REFINEMENT_STEP: f64 = 1e-6;
+/// Least scale of an effect parameter in the refinement, so that one started at zero
+/// still gets a finite-difference step.
+const EFFECT_SCALE_FLOOR: f64 = 1e-4;
+
+/// The baseline parameters [`refine_output_error`] frees: [`refined_for`], then
+/// [`REFINED_FRICTION`] and [`REFINED_SPRING`] with a force channel, then the valve's
+/// dynamics. Without a force channel the friction's yield and shape, and a centring
+/// spring, are not separable in the motion from the friction amplitude and the oil column
+/// (the closed-loop fit keeps them): freed, they leave the fit crawling along those
+/// valleys.
+fn refinement_free(c: &Campaign, p0: &Params) -> Vec<BaselineParameter> {
     let freed_with_force: &[BaselineParameter] = if force_recorded(c) {
         &[REFINED_FRICTION[0], REFINED_FRICTION[1], REFINED_SPRING[0]]
     } else {
         &[]
     };
-    let free: Vec<BaselineParameter> = refined_for(c)
+    refined_for(c)
         .iter()
         .chain(freed_with_force)
         .chain(valve_dynamics(p0))
         .copied()
-        .collect();
-    let ranges: Vec<Range> = free.iter().map(|&w| refinement_range(p0, w, c)).collect();
-    let freed: Vec<(Effect, &[f64])> = effects
-        .iter()
-        .filter(|(e, _)| !e.fitted_on_score())
-        .copied()
-        .collect();
-    let theta_e: Vec<f64> = freed.iter().flat_map(|(_, t)| t.iter().copied()).collect();
-    let ne = theta_e.len();
-    let (mut elo, mut ehi) = (Vec::new(), Vec::new());
-    for (e, _) in &freed {
-        let (lo, hi) = e.bounds(table);
-        elo.extend(lo);
-        ehi.extend(hi);
+        .collect()
+}
+
+/// The effects a refinement frees (not [`Effect::fitted_on_score`]): their parameters
+/// lead the fit's vector, in the order given, with their bounds for the table.
+struct FreedEffects<'a> {
+    effects: Vec<(Effect, &'a [f64])>,
+    start: Vec<f64>,
+    lower: Vec<f64>,
+    upper: Vec<f64>,
+}
+
+impl<'a> FreedEffects<'a> {
+    fn new(effects: &[(Effect, &'a [f64])], table: &Params) -> Self {
+        let effects: Vec<(Effect, &[f64])> = effects
+            .iter()
+            .filter(|(e, _)| !e.fitted_on_score())
+            .copied()
+            .collect();
+        let start: Vec<f64> = effects
+            .iter()
+            .flat_map(|(_, t)| t.iter().copied())
+            .collect();
+        let (mut lower, mut upper) = (Vec::new(), Vec::new());
+        for (e, _) in &effects {
+            let (lo, hi) = e.bounds(table);
+            lower.extend(lo);
+            upper.extend(hi);
+        }
+        FreedEffects {
+            effects,
+            start,
+            lower,
+            upper,
+        }
     }
-    let assemble = |t: &[f64]| {
-        let mut p = *p0;
+}
+
+/// What a refinement fits: the freed effects' parameters, then the free baseline
+/// parameters, on `p0`.
+struct Refinement<'a> {
+    p0: &'a Params,
+    effects: FreedEffects<'a>,
+    free: Vec<BaselineParameter>,
+}
+
+impl Refinement<'_> {
+    /// `p0` with the fit's vector `t` set.
+    fn params(&self, t: &[f64]) -> Params {
+        let mut p = *self.p0;
         let mut at = 0;
-        for (e, theta) in &freed {
+        for (e, theta) in &self.effects.effects {
             e.apply(&mut p, &t[at..at + theta.len()]);
             at += theta.len();
         }
-        for (k, which) in free.iter().enumerate() {
+        let ne = self.effects.start.len();
+        for (k, which) in self.free.iter().enumerate() {
             which.set(&mut p, t[ne + k]);
         }
         p
-    };
-    let join = |a: &[f64], b: Vec<f64>| -> Vec<f64> { a.iter().copied().chain(b).collect() };
-    let of = |f: fn(&Range) -> f64| ranges.iter().map(f).collect::<Vec<f64>>();
-    let start: Vec<f64> = free.iter().map(|w| w.get(p0)).collect();
-    let escale: Vec<f64> = theta_e.iter().map(|x| x.abs().max(1e-4)).collect();
-    let fit = minimise(
-        |t| residual_vector(&assemble(t), c, tests, whitening),
-        &join(&theta_e, start),
-        &join(&elo, of(|r| r.lower)),
-        &join(&ehi, of(|r| r.upper)),
-        &join(&escale, of(|r| r.scale)),
-        // the baseline is fitted to its noise: a flow gain 1e-4 off already shows
-        LsqOptions {
-            max_iterations: iterations,
-            tolerance: 1e-6,
-            step: 1e-6,
-            parallel: false,
-        },
-    )?;
-    if super::trace_enabled() {
-        // a parameter that ends on its range's edge is where the refinement was stopped
-        for (k, w) in free.iter().enumerate() {
-            let r = &ranges[k];
-            let x = fit.theta[ne + k];
-            eprintln!(
-                "    {w:?} {x:.4e} from {:.4e} in [{:.4e}, {:.4e}]",
-                w.get(p0),
-                r.lower,
-                r.upper
-            );
-        }
     }
-    Some(Refined {
-        cost: fit.cost,
-        params: assemble(&fit.theta),
-        iterations: fit.iterations,
-        effect_sigma: fit.sigma[..ne].to_vec(),
-        effect_bounds: (elo, ehi),
-    })
+}
+
+/// Each refined parameter's end against its range (SHAKETABLE_TRACE): one that ends on
+/// its range's edge is where the refinement was stopped.
+fn trace_ranges(p0: &Params, free: &[BaselineParameter], ranges: &[Range], ends: &[f64]) {
+    for (k, w) in free.iter().enumerate() {
+        let r = &ranges[k];
+        let x = ends[k];
+        eprintln!(
+            "    {w:?} {x:.4e} from {:.4e} in [{:.4e}, {:.4e}]",
+            w.get(p0),
+            r.lower,
+            r.upper
+        );
+    }
 }
 
 #[cfg(test)]

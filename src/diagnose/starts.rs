@@ -92,38 +92,8 @@ pub(super) fn starts(
 ) -> Vec<Vec<f64>> {
     let m = base.table.mass_kg;
     match effect {
-        Effect::Specimen => {
-            // the specimen's resonance is the largest deviation of F/a from a rigid mass
-            let Some((f, h)) = apparent_mass(c) else {
-                return specimen_blind_grid(m);
-            };
-            let k = (0..f.len())
-                .max_by(|&a, &b| (h[a] - m).norm().total_cmp(&(h[b] - m).norm()))
-                .unwrap_or(0);
-            let fs = f[k];
-            grid::SPECIMEN_MASS_RATIOS
-                .iter()
-                .map(|r| vec![r * m, fs, grid::SPECIMEN_DAMPING])
-                .collect()
-        }
-        Effect::Foundation => {
-            // the FRF fit and a spread over the plausible band, screened by the caller
-            // the FRF fit places the mode to a few percent; its mass and damping trade off
-            // on a smeared peak, so the mass is spread
-            let mut g: Vec<Vec<f64>> = Vec::new();
-            if let Some(f) = informed {
-                for r in grid::FOUNDATION_INFORMED_MASS_RATIOS {
-                    g.push(vec![r * m, f[1], grid::FOUNDATION_DAMPING]);
-                }
-            }
-            g.extend(resonance_grid(
-                m,
-                &grid::FOUNDATION_FREQUENCIES_HZ,
-                &grid::FOUNDATION_MASS_RATIOS,
-                grid::FOUNDATION_DAMPING,
-            ));
-            g
-        }
+        Effect::Specimen => specimen_starts(c, m),
+        Effect::Foundation => foundation_starts(m, informed),
         Effect::StickSlip => {
             let mut g = Vec::new();
             for r in grid::STICK_SLIP_RATIOS {
@@ -133,21 +103,7 @@ pub(super) fn starts(
             }
             g
         }
-        Effect::FlowSaturation => {
-            // the velocity plateau of the fastest sines
-            let mut vmax: f64 = 0.0;
-            for (spec, r) in c.info.tests.iter().zip(&c.records) {
-                if let (TestKind::Sine, Some(x)) = (spec.kind, r.displacement_m.as_deref()) {
-                    let fs = c.sample_rate_for(spec);
-                    let lag = grid::PLATEAU_LAG_SAMPLES;
-                    for k in lag..x.len() {
-                        vmax = vmax.max(((x[k] - x[k - lag]) * fs / lag as f64).abs());
-                    }
-                }
-            }
-            let q = vmax * base.actuator.piston_area_m2;
-            vec![vec![q.max(grid::MIN_FLOW_START_M3_S)]]
-        }
+        Effect::FlowSaturation => vec![vec![flow_limit_start(c, base)]],
         Effect::ValveDeadband => grid::DEADBANDS.iter().map(|&d| vec![d]).collect(),
         // a grid either side of symmetry; the direction split adds its own start
         Effect::FrictionAsymmetry | Effect::FlowAsymmetry => {
@@ -157,6 +113,62 @@ pub(super) fn starts(
         Effect::FreePlay => Vec::new(),
         Effect::SpecimenTwoModes | Effect::SpecimenThreeModes => higher_mode_starts(c, base),
     }
+}
+
+/// A specimen's starts on a table of `table_mass_kg`: its resonance at the largest
+/// deviation of `F/a` from a rigid mass, at [`grid::SPECIMEN_MASS_RATIOS`]; the blind grid
+/// without the apparent mass.
+fn specimen_starts(c: &Campaign, table_mass_kg: f64) -> Vec<Vec<f64>> {
+    let m = table_mass_kg;
+    let Some((f, h)) = apparent_mass(c) else {
+        return specimen_blind_grid(m);
+    };
+    let k = (0..f.len())
+        .max_by(|&a, &b| (h[a] - m).norm().total_cmp(&(h[b] - m).norm()))
+        .unwrap_or(0);
+    let fs = f[k];
+    grid::SPECIMEN_MASS_RATIOS
+        .iter()
+        .map(|r| vec![r * m, fs, grid::SPECIMEN_DAMPING])
+        .collect()
+}
+
+/// A foundation's starts on a table of `table_mass_kg`: the FRF fit's (`informed`,
+/// [`foundation_start`]) and a spread over the plausible band, screened by the caller.
+/// The FRF fit places the mode to a few percent; its mass and damping trade off on a
+/// smeared peak, so the mass is spread.
+fn foundation_starts(table_mass_kg: f64, informed: Option<&[f64]>) -> Vec<Vec<f64>> {
+    let m = table_mass_kg;
+    let mut g: Vec<Vec<f64>> = Vec::new();
+    if let Some(f) = informed {
+        for r in grid::FOUNDATION_INFORMED_MASS_RATIOS {
+            g.push(vec![r * m, f[1], grid::FOUNDATION_DAMPING]);
+        }
+    }
+    g.extend(resonance_grid(
+        m,
+        &grid::FOUNDATION_FREQUENCIES_HZ,
+        &grid::FOUNDATION_MASS_RATIOS,
+        grid::FOUNDATION_DAMPING,
+    ));
+    g
+}
+
+/// The flow limit's start, m^3/s: the velocity plateau of the fastest sines times the
+/// piston area (at least [`grid::MIN_FLOW_START_M3_S`]).
+fn flow_limit_start(c: &Campaign, base: &Params) -> f64 {
+    let mut vmax: f64 = 0.0;
+    for (spec, r) in c.info.tests.iter().zip(&c.records) {
+        if let (TestKind::Sine, Some(x)) = (spec.kind, r.displacement_m.as_deref()) {
+            let fs = c.sample_rate_for(spec);
+            let lag = grid::PLATEAU_LAG_SAMPLES;
+            for k in lag..x.len() {
+                vmax = vmax.max(((x[k] - x[k - lag]) * fs / lag as f64).abs());
+            }
+        }
+    }
+    let q = vmax * base.actuator.piston_area_m2;
+    q.max(grid::MIN_FLOW_START_M3_S)
 }
 
 /// Starts of a specimen with one mode more than `base`'s: its modes as they are, then the
@@ -331,66 +343,141 @@ pub(super) fn informed_start(effect: Effect, c: &Campaign, base: &Params) -> Opt
 /// read where coherence is high, at 0.25 Hz resolution: a lightly damped mode is narrower
 /// than the 0.5 Hz the other spectra use), or None when `D` has no clear peak.
 pub(super) fn foundation_start(c: &Campaign, table_mass_kg: f64) -> Option<Vec<f64>> {
-    // the broadest excitation first: the oil-column test (R3), the mass test, the valve
-    // test ([`crate::identify::select`])
-    let roles = random_roles(c);
-    let i = roles.oil_column.or(roles.mass).or(roles.valve)?;
-    let (r, fs) = (&c.records[i], c.sample_rate_of(i));
-    let w = Welch::new(
-        fs,
-        WelchOptions::for_resolution(fs, 0.25).fit_to(r.len(), 4),
-    )
-    .ok()?;
-    let e = w
-        .frf(
-            r.displacement_m.as_deref()?,
-            r.acceleration_m_s2.as_deref()?,
-        )
-        .ok()?;
-    let idx: Vec<usize> = e
-        .band(3.0, 60.0)
-        .into_iter()
-        .filter(|&i| e.coherence[i] > 0.8)
-        .collect();
-    if idx.len() < 8 {
-        return None;
-    }
-    let d = |i: usize| {
-        let w = 2.0 * PI * e.frequency_hz[i];
-        (e.h1[i] / (-w * w) - 1.0).norm()
-    };
-    let k = *idx.iter().max_by(|&&a, &&b| d(a).total_cmp(&d(b)))?;
-    let peak = d(k);
-    // a clear peak: well above the median level
-    let mut levels: Vec<f64> = idx.iter().map(|&i| d(i)).collect();
-    levels.sort_by(f64::total_cmp);
-    if peak < 5.0 * levels[levels.len() / 2] {
-        return None;
-    }
-    let f_peak = e.frequency_hz[k];
-    // half-power width from the neighbouring bins above 1/sqrt(2) of the peak (at least
-    // one bin: the resolution bounds the damping from below)
-    let df = e.frequency_hz[1] - e.frequency_hz[0];
-    let above = idx
-        .iter()
-        .filter(|&&i| {
-            (e.frequency_hz[i] - f_peak).abs() < 0.2 * f_peak && d(i) > peak / 2f64.sqrt()
-        })
-        .count()
-        .max(1);
-    let zeta = (above as f64 * df / (2.0 * f_peak)).clamp(0.005, 0.3);
-    // the mass ratio from the level an octave below the peak
-    let below = idx
-        .iter()
-        .copied()
-        .filter(|&i| e.frequency_hz[i] < 0.5 * f_peak)
-        .max_by(|&a, &b| e.frequency_hz[a].total_cmp(&e.frequency_hz[b]));
-    let ratio = match below {
-        Some(i) => (d(i) * (f_peak / e.frequency_hz[i]).powi(2)).clamp(1e-3, 2.0),
-        None => 0.05,
-    };
+    let d = Discrepancy::read(c)?;
+    let k = d.clear_peak()?;
+    let f_peak = d.frequency_hz[k];
+    let zeta = d.half_power_damping(k);
+    let ratio = d.mass_ratio(k);
     let f_f = f_peak * (1.0 + ratio).sqrt();
     Some(vec![table_mass_kg / ratio, f_f, zeta])
+}
+
+/// Thresholds of [`foundation_start`]'s reading of the discrepancy `D`.
+mod discrepancy {
+    /// Line spacing of its spectra, Hz: a lightly damped foundation's peak is narrower
+    /// than the 0.5 Hz the other spectra use.
+    pub const RESOLUTION_HZ: f64 = 0.25;
+    /// Welch segments it averages at least.
+    pub const MIN_SEGMENTS: usize = 4;
+    /// Where it is read, Hz: the foundation frequencies a start can take.
+    pub const BAND_HZ: [f64; 2] = [3.0, 60.0];
+    /// LVDT-accelerometer coherence a line needs to count: below it `D` is the sensors'
+    /// noise, not the reaction mass.
+    pub const MIN_COHERENCE: f64 = 0.8;
+    /// Coherent lines it needs at all.
+    pub const MIN_LINES: usize = 8;
+    /// A clear peak stands this many times above the median level of the coherent lines.
+    pub const CLEAR_PEAK_RATIO: f64 = 5.0;
+    /// Lines within this share of the peak frequency count towards its half-power width
+    /// (the peak's own lobe, not another one).
+    pub const HALF_POWER_SPAN: f64 = 0.2;
+    /// The damping ratio read off the half-power width is kept within these (a width of
+    /// one line bounds it from below at a few tens of hertz; a width of 60 % is no peak).
+    pub const DAMPING_RANGE: [f64; 2] = [0.005, 0.3];
+    /// The mass ratio is read at the highest line below this share of the peak frequency
+    /// (an octave below, where `D ~ (w/w_f)^2 M/M_f` holds).
+    pub const BELOW_PEAK: f64 = 0.5;
+    /// The mass ratio `M/M_f` read there is kept within these (a foundation of 0.5 to
+    /// 1000 table masses).
+    pub const MASS_RATIO_RANGE: [f64; 2] = [1e-3, 2.0];
+    /// The mass ratio without a coherent line an octave below the peak (a foundation of
+    /// 20 table masses).
+    pub const MASS_RATIO_UNREAD: f64 = 0.05;
+}
+
+/// The discrepancy `|D| = |a / (-w^2 x_lvdt) - 1|` of [`foundation_start`] at the
+/// coherent lines of the broadest random test.
+struct Discrepancy {
+    /// The coherent lines, Hz.
+    frequency_hz: Vec<f64>,
+    /// `|D|` at each.
+    level: Vec<f64>,
+    /// The spectra's line spacing, Hz.
+    resolution_hz: f64,
+}
+
+impl Discrepancy {
+    /// From the broadest excitation first: the oil-column test (R3), the mass test, the
+    /// valve test ([`crate::identify::select`]); None without LVDT and accelerometer or
+    /// with fewer than [`discrepancy::MIN_LINES`] coherent lines.
+    fn read(c: &Campaign) -> Option<Discrepancy> {
+        let roles = random_roles(c);
+        let i = roles.oil_column.or(roles.mass).or(roles.valve)?;
+        let (r, fs) = (&c.records[i], c.sample_rate_of(i));
+        let w = Welch::new(
+            fs,
+            WelchOptions::for_resolution(fs, discrepancy::RESOLUTION_HZ)
+                .fit_to(r.len(), discrepancy::MIN_SEGMENTS),
+        )
+        .ok()?;
+        let e = w
+            .frf(
+                r.displacement_m.as_deref()?,
+                r.acceleration_m_s2.as_deref()?,
+            )
+            .ok()?;
+        let [lo, hi] = discrepancy::BAND_HZ;
+        let idx: Vec<usize> = e
+            .band(lo, hi)
+            .into_iter()
+            .filter(|&i| e.coherence[i] > discrepancy::MIN_COHERENCE)
+            .collect();
+        if idx.len() < discrepancy::MIN_LINES {
+            return None;
+        }
+        let level = |i: usize| {
+            let w = 2.0 * PI * e.frequency_hz[i];
+            (e.h1[i] / (-w * w) - 1.0).norm()
+        };
+        Some(Discrepancy {
+            frequency_hz: idx.iter().map(|&i| e.frequency_hz[i]).collect(),
+            level: idx.iter().map(|&i| level(i)).collect(),
+            resolution_hz: e.frequency_hz[1] - e.frequency_hz[0],
+        })
+    }
+
+    /// The line of the highest level, if it stands clear of the median level
+    /// ([`discrepancy::CLEAR_PEAK_RATIO`]).
+    fn clear_peak(&self) -> Option<usize> {
+        let n = self.level.len();
+        let k = (0..n).max_by(|&a, &b| self.level[a].total_cmp(&self.level[b]))?;
+        let mut levels = self.level.clone();
+        levels.sort_by(f64::total_cmp);
+        if self.level[k] < discrepancy::CLEAR_PEAK_RATIO * levels[n / 2] {
+            return None;
+        }
+        Some(k)
+    }
+
+    /// The damping ratio from the half-power width of the peak at line `k`: the
+    /// neighbouring lines above 1/sqrt(2) of the peak (at least one line: the resolution
+    /// bounds the damping from below).
+    fn half_power_damping(&self, k: usize) -> f64 {
+        let (f_peak, peak) = (self.frequency_hz[k], self.level[k]);
+        let above = (0..self.level.len())
+            .filter(|&j| {
+                (self.frequency_hz[j] - f_peak).abs() < discrepancy::HALF_POWER_SPAN * f_peak
+                    && self.level[j] > peak / 2f64.sqrt()
+            })
+            .count()
+            .max(1);
+        let [lo, hi] = discrepancy::DAMPING_RANGE;
+        (above as f64 * self.resolution_hz / (2.0 * f_peak)).clamp(lo, hi)
+    }
+
+    /// The mass ratio `M/M_f` from the level an octave below the peak at line `k`.
+    fn mass_ratio(&self, k: usize) -> f64 {
+        let f_peak = self.frequency_hz[k];
+        let f = &self.frequency_hz;
+        let below = (0..f.len())
+            .filter(|&j| f[j] < discrepancy::BELOW_PEAK * f_peak)
+            .max_by(|&a, &b| f[a].total_cmp(&f[b]));
+        let [lo, hi] = discrepancy::MASS_RATIO_RANGE;
+        match below {
+            Some(j) => (self.level[j] * (f_peak / f[j]).powi(2)).clamp(lo, hi),
+            None => discrepancy::MASS_RATIO_UNREAD,
+        }
+    }
 }
 
 #[cfg(test)]

@@ -40,7 +40,7 @@ pub(super) fn fit_stick_slip(
     let eval = eval_on(*base);
     let bounds = e.bounds(base);
     let start = match stribeck::fit_curve(&stribeck::measured_curve(c, base, sig)) {
-        Some([f_mu, r, v]) => [r.clamp(1.05, 6.0), v.clamp(3e-4, 0.03), f_mu],
+        Some(curve) => curve_start(curve),
         None => grid_stick_slip(&eval, base.friction.force_n, &bounds)?,
     };
     let mut best = polish_stick_slip(&eval, start, &bounds)?;
@@ -78,6 +78,58 @@ pub(super) fn fit_stick_slip(
 /// by more than its noise (the issue measured 2 noise RMS for a 1.3 ratio).
 pub(super) const NEGLIGIBLE_STATIC_EXCESS: f64 = 0.05;
 
+/// The polish's start `[r_s, v_s, F_mu]` from the curve's fit `[F_mu, r_s, v_s]`, the
+/// ratio and the velocity kept within [`CURVE_START_RATIO`] and
+/// [`CURVE_START_STRIBECK_M_S`].
+fn curve_start([f_mu, r, v]: [f64; 3]) -> [f64; 3] {
+    [
+        r.clamp(CURVE_START_RATIO[0], CURVE_START_RATIO[1]),
+        v.clamp(CURVE_START_STRIBECK_M_S[0], CURVE_START_STRIBECK_M_S[1]),
+        f_mu,
+    ]
+}
+
+/// Where the curve's static ratio may start the polish: at least a 5 % static excess (the
+/// simplex works on `ln(r_s - 1)`, which has no value at `r_s = 1`, the bare table's
+/// curve), at most the effect's upper fitting bound.
+const CURVE_START_RATIO: [f64; 2] = [1.05, 6.0];
+
+/// Where the curve's Stribeck velocity may start the polish, m/s: from the grid's slowest
+/// ([`GRID_STRIBECK_M_S`]) to 30 mm/s, a little beyond the grid's fastest (20 mm/s) and
+/// well inside the effect's fitting bounds (0.1-50 mm/s).
+const CURVE_START_STRIBECK_M_S: [f64; 2] = [3e-4, 0.03];
+
+/// The grid of [`grid_stick_slip`]: six static excesses `r_s - 1` from 0.1 in steps of
+/// this factor (0.1 to 4.3: ratios 1.1-5.3).
+const GRID_EXCESS_STEP: f64 = 2.12;
+/// The grid's smallest static excess `r_s - 1`: 10 %, twice [`NEGLIGIBLE_STATIC_EXCESS`].
+const GRID_SMALLEST_EXCESS: f64 = 0.1;
+/// Six Stribeck velocities from [`GRID_STRIBECK_M_S`] in steps of this factor (0.3 to
+/// 20 mm/s, the plausible knees of the curve: [`stribeck`]'s bins).
+const GRID_STRIBECK_STEP: f64 = 2.32;
+/// The grid's slowest Stribeck velocity, m/s.
+const GRID_STRIBECK_M_S: f64 = 3e-4;
+/// Points per axis of the coarse grid.
+const GRID_POINTS: i32 = 6;
+/// The refinements of the grid around its best point, as fractions of its geometric step
+/// (half, then quarter steps).
+const GRID_REFINEMENTS: [f64; 2] = [0.5, 0.25];
+/// The friction amplitudes tried at the grid's best point, as multiples of the
+/// baseline's: the baseline absorbed part of the static friction into its amplitude, so
+/// the kinetic one lies at or a little below it.
+const GRID_FRICTION_FACTORS: [f64; 5] = [0.7, 0.8, 0.9, 1.0, 1.1];
+
+/// The polish's initial simplex steps in `(ln(r_s - 1), ln v_s, ln F_mu)`: a fifth of the
+/// static excess, a quarter of the Stribeck velocity, 3 % of the friction amplitude (the
+/// score's valley is about that wide in each).
+const POLISH_STEPS: [f64; 3] = [0.2, 0.25, 0.03];
+/// The polish stops when the simplex's costs spread by less than this share of the
+/// start's score.
+const POLISH_SPREAD_TOLERANCE: f64 = 1e-3;
+/// Nelder-Mead iterations of one polish: three parameters settle in a few dozen
+/// evaluations, and each costs a full score (every signature test simulated).
+const POLISH_ITERATIONS: u64 = 25;
+
 /// Output-error iterations of one unbending round: a few steps take the baseline's
 /// bends out; the effect it holds keeps it from converging anyway.
 pub(super) const UNBENDING_ITERATIONS: usize = 4;
@@ -102,16 +154,20 @@ pub(super) fn grid_stick_slip(
     };
     // ratios 1.1-5 and Stribeck velocities 0.3-20 mm/s, geometric steps, then two finer
     // 3 x 3 grids (half and quarter steps) around the best point
-    let (sr, sv) = (2.12f64, 2.32f64);
-    let ratios: Vec<f64> = (0..6).map(|k| 1.0 + 0.1 * sr.powi(k)).collect();
-    let speeds: Vec<f64> = (0..6).map(|k| 3e-4 * sv.powi(k)).collect();
+    let (sr, sv) = (GRID_EXCESS_STEP, GRID_STRIBECK_STEP);
+    let ratios: Vec<f64> = (0..GRID_POINTS)
+        .map(|k| 1.0 + GRID_SMALLEST_EXCESS * sr.powi(k))
+        .collect();
+    let speeds: Vec<f64> = (0..GRID_POINTS)
+        .map(|k| GRID_STRIBECK_M_S * sv.powi(k))
+        .collect();
     let coarse: Vec<(f64, f64, f64)> = ratios
         .iter()
         .flat_map(|&r| speeds.iter().map(move |&v| (r, v, f0)))
         .collect();
     let (_, mut t, _) = best_of(coarse)?;
     let (lower, upper) = bounds;
-    for refinement in [0.5, 0.25] {
+    for refinement in GRID_REFINEMENTS {
         let (r0, v0) = (t[0] - 1.0, t[1]);
         let mut fine = Vec::new();
         for i in -1..=1 {
@@ -127,7 +183,7 @@ pub(super) fn grid_stick_slip(
     }
     // the friction amplitude: the baseline's absorbed part of the static friction
     let (_, t, p) = best_of(
-        [0.7, 0.8, 0.9, 1.0, 1.1]
+        GRID_FRICTION_FACTORS
             .iter()
             .map(|k| (t[0], t[1], k * f0))
             .collect(),
@@ -166,19 +222,17 @@ pub(super) fn polish_stick_slip(
     }
     let first = eval(start[0], start[1], start[2]);
     let x0 = vec![(start[0] - 1.0).ln(), start[1].ln(), start[2].ln()];
-    // steps: a fifth of the static excess, a quarter of the Stribeck velocity, 3 % of
-    // the friction amplitude (the score's valley is about that wide in each)
     let mut simplex = vec![x0.clone()];
-    for (k, h) in [0.2, 0.25, 0.03].iter().enumerate() {
+    for (k, h) in POLISH_STEPS.iter().enumerate() {
         let mut x = x0.clone();
         x[k] += h;
         simplex.push(x);
     }
     let solver = NelderMead::new(simplex)
-        .with_sd_tolerance(1e-3 * first.0)
+        .with_sd_tolerance(POLISH_SPREAD_TOLERANCE * first.0)
         .ok()?;
     let best = Executor::new(Score(eval, bounds), solver)
-        .configure(|s| s.max_iters(25))
+        .configure(|s| s.max_iters(POLISH_ITERATIONS))
         .run()
         .ok()
         .and_then(|r| r.state.best_param)

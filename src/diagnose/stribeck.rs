@@ -33,6 +33,29 @@ const SLOPE_HALF_WIDTH: usize = 20;
 /// Sliding, in yield displacements, after which `|Z|` counts as saturated.
 const SATURATED_YIELDS: f64 = 4.0;
 
+/// Fewest speed bins a curve needs for its three-parameter fit.
+const MIN_CURVE_BINS: usize = 4;
+/// The fit's start of the Stribeck velocity, m/s: 5 mm/s, mid-range of the plausible
+/// knees (1-10 mm/s, [`BIN_EDGES_M_S`]).
+const START_STRIBECK_M_S: f64 = 5e-3;
+/// The friction amplitude's range in the fit, as multiples of the fastest bin's level
+/// (the kinetic friction the curve reaches there): wide, the curve's start is only read
+/// off two bins.
+const AMPLITUDE_RANGE: [f64; 2] = [0.2, 5.0];
+/// The static ratio's range in the fit (and of its start): the `stick_slip` effect's
+/// fitting bounds ([`crate::effects::stick_slip`]).
+const RATIO_RANGE: [f64; 2] = [1.0, 6.0];
+/// The Stribeck velocity's range in the fit, m/s: the effect's fitting bounds.
+const STRIBECK_RANGE_M_S: [f64; 2] = [1e-4, 0.05];
+/// Iteration cap of the curve's fit: three parameters on at most 17 bins, each
+/// evaluation a closed form, so the cap only stops a fit that does not converge.
+const FIT_ITERATIONS: usize = 50;
+/// The fit stops at a step gaining less than this share of its cost (the least-squares
+/// default: the fit is cheap, so it runs to convergence).
+const FIT_TOLERANCE: f64 = 1e-10;
+/// Relative finite-difference step of the fit's Jacobian.
+const FIT_STEP: f64 = 1e-6;
+
 /// One speed bin of the measured curve.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct CurvePoint {
@@ -115,7 +138,7 @@ pub fn measured_curve(c: &Campaign, base: &Params, tests: &[usize]) -> Vec<Curve
 /// or None when the curve has too few bins or no fit converges. A curve without a
 /// static peak gives `r_s` near 1.
 pub fn fit_curve(curve: &[CurvePoint]) -> Option<[f64; 3]> {
-    if curve.len() < 4 {
+    if curve.len() < MIN_CURVE_BINS {
         return None;
     }
     let model = |t: &[f64], v: f64| t[0] * (1.0 + (t[1] - 1.0) * (-(v / t[2]).powi(2)).exp());
@@ -124,7 +147,14 @@ pub fn fit_curve(curve: &[CurvePoint]) -> Option<[f64; 3]> {
     if !(kinetic > 0.0 && at_rest.is_finite()) {
         return None;
     }
-    let start = [kinetic, (at_rest / kinetic).clamp(1.0, 6.0), 5e-3];
+    let [ratio_lo, ratio_hi] = RATIO_RANGE;
+    let start = [
+        kinetic,
+        (at_rest / kinetic).clamp(ratio_lo, ratio_hi),
+        START_STRIBECK_M_S,
+    ];
+    let [amplitude_lo, amplitude_hi] = AMPLITUDE_RANGE;
+    let [stribeck_lo, stribeck_hi] = STRIBECK_RANGE_M_S;
     let fit = minimise(
         |t| {
             Some(
@@ -135,13 +165,13 @@ pub fn fit_curve(curve: &[CurvePoint]) -> Option<[f64; 3]> {
             )
         },
         &start,
-        &[0.2 * kinetic, 1.0, 1e-4],
-        &[5.0 * kinetic, 6.0, 0.05],
-        &[kinetic, 1.0, 5e-3],
+        &[amplitude_lo * kinetic, ratio_lo, stribeck_lo],
+        &[amplitude_hi * kinetic, ratio_hi, stribeck_hi],
+        &[kinetic, 1.0, START_STRIBECK_M_S],
         LsqOptions {
-            max_iterations: 50,
-            tolerance: 1e-10,
-            step: 1e-6,
+            max_iterations: FIT_ITERATIONS,
+            tolerance: FIT_TOLERANCE,
+            step: FIT_STEP,
             parallel: false,
         },
     )?;

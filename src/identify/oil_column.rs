@@ -12,6 +12,7 @@ use super::{
 };
 use crate::campaign::{Measured, Record};
 use crate::linear::ValveTf;
+use crate::params::Actuator;
 use num_complex::Complex64;
 use std::f64::consts::PI;
 
@@ -50,6 +51,21 @@ impl OilGeometry {
                 })
             }
         }
+    }
+
+    /// The actuator of this geometry whose oil column has stiffness `stiffness_n_m` (its
+    /// bulk modulus, [`Actuator::bulk_modulus_for_stiffness_pa`]) and leakage
+    /// `leakage_m3_s_pa`; the rest is the default actuator's.
+    fn actuator(&self, stiffness_n_m: f64, leakage_m3_s_pa: f64) -> Actuator {
+        let mut a = Actuator {
+            piston_area_m2: self.piston_area_m2,
+            total_oil_volume_m3: self.total_oil_volume_m3,
+            flow_gain_m3_s: self.flow_gain_m3_s,
+            leakage_m3_s_pa,
+            ..Actuator::default()
+        };
+        a.bulk_modulus_pa = a.bulk_modulus_for_stiffness_pa(stiffness_n_m);
+        a
     }
 }
 
@@ -214,12 +230,11 @@ pub fn fit_oil_column(
     let h1fit = CrossSpectra::new(&w, x, x, force).ok().and_then(|h1| {
         fit_stiffness_and_leakage(&h1, &table, geometry, &|_| Complex64::new(1.0, 0.0))
     });
-    let area = geometry.piston_area_m2;
     let figures = |k_oil: f64, leak: f64| {
-        let beta = k_oil * geometry.total_oil_volume_m3 / (4.0 * area * area);
+        let fitted = geometry.actuator(k_oil, leak);
         let f = (k_oil / mass_kg).sqrt() / (2.0 * PI);
-        let zeta = leak / area * (beta * mass_kg / geometry.total_oil_volume_m3).sqrt();
-        (f, zeta, beta)
+        let zeta = fitted.oil_column_damping_ratio(mass_kg);
+        (f, zeta, fitted.bulk_modulus_pa)
     };
     let (f_oil, zeta, beta) = figures(fit.theta[0], fit.theta[1]);
     check_bounds(

@@ -321,14 +321,7 @@ impl OilColumn {
         OilColumn {
             stiffness_n_m: k,
             frequency_hz: (k / p.table.mass_kg).sqrt() / (2.0 * PI),
-            damping_ratio: a.leakage_m3_s_pa / a.piston_area_m2
-                * (a.bulk_modulus_pa * p.table.mass_kg / a.total_oil_volume_m3).sqrt(),
+            damping_ratio: a.oil_column_damping_ratio(p.table.mass_kg),
         }
-    }
-
-    /// The bulk modulus that gives `frequency_hz` for mass `mass_kg` and the geometry
-    /// (`A`, `V_t`): `beta = (2 pi f)^2 M V_t / (4 A^2)` (paper 4.1.3).
-    pub fn bulk_modulus_pa(frequency_hz: f64, mass_kg: f64, area_m2: f64, volume_m3: f64) -> f64 {
-        (2.0 * PI * frequency_hz).powi(2) * mass_kg * volume_m3 / (4.0 * area_m2 * area_m2)
     }
 }

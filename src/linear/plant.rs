@@ -27,7 +27,7 @@ impl Plant {
         let act = &p.actuator;
         let m = p.table.mass_kg;
         let area = act.piston_area_m2;
-        let rate = 4.0 * act.bulk_modulus_pa / act.total_oil_volume_m3;
+        let rate = act.pressure_rate_pa_m3();
         // stick-slip: the amplitude at zero velocity is r_s F_mu
         let friction = p.friction.force_n
             * if p.stick_slip.enabled {

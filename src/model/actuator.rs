@@ -51,7 +51,7 @@ impl Hydraulics {
             leakage: a.leakage_m3_s_pa,
             flow_gain: a.flow_gain_m3_s,
             supply_pa: a.supply_pressure_pa,
-            ideal_rate: 4.0 * a.bulk_modulus_pa / a.total_oil_volume_m3,
+            ideal_rate: a.pressure_rate_pa_m3(),
             orifice: a.flow_gain_m3_s / signed_root(a.supply_pressure_pa / 2.0),
             max_flow: p.flow_saturation.max_flow(),
             deadband: p.valve_deadband.band(),

@@ -8,6 +8,7 @@ use crate::identify::{
     FrictionFit, Identification, MassFit, OilColumnFit, PeriodicMassFit, ServovalveFit,
     TriangleFit, Validation,
 };
+use crate::linear::ValveTf;
 use crate::params::Params;
 use num_complex::Complex64;
 use std::f64::consts::PI;
@@ -50,11 +51,10 @@ pub fn sections(dir: &Path, id: &Identification) -> Result<Vec<Section>, ReportE
 fn servovalve(dir: &Path, v: &ServovalveFit) -> Result<Vec<Section>, ReportError> {
     let mut sections = Vec::new();
     let f = &v.measured.frequency_hz;
-    let first = model_curve(f, |s| v.first_order_gain / (1.0 + s * v.time_constant_s));
-    let wn = 2.0 * PI * v.natural_frequency_hz;
-    let second = model_curve(f, |s| {
-        v.gain * wn * wn / (s * s + 2.0 * v.damping_ratio * wn * s + wn * wn)
-    });
+    let first_order = ValveTf::first_order(v.first_order_gain, v.time_constant_s);
+    let first = model_curve(f, |s| first_order.response(s));
+    let second_order = ValveTf::second_order(v.gain, v.natural_frequency_hz, v.damping_ratio);
+    let second = model_curve(f, |s| second_order.response(s));
     let h = v.measured.complex();
     bode_png(
         &dir.join("servovalve.png"),

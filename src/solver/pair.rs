@@ -19,7 +19,13 @@ impl Simulator {
 }
 
 /// Two RK4 steps of the leading `M` states, stage by stage interleaved: each as
-/// [`super::rk4_step_leading`] computes it.
+/// [`super::rk4_step_leading`] computes it. Written out rather than calling that step
+/// twice: the point of the pair is that the two runs' derivative chains overlap within
+/// each stage, which two calls one after the other would not give. It must stay equal to
+/// `rk4_step_leading`, operation for operation (the same stages, the same expressions in
+/// the same order), so that a paired run is the run alone bit for bit; the test
+/// `paired_runs_are_the_runs_alone_bit_for_bit` below checks it. (A generic `L`-lane step
+/// shared by both passes that test, but its speed on the pair could not be shown equal.)
 #[inline(always)]
 fn rk4_step_pair<const N: usize, const M: usize>(
     (xa, ha): (&mut [f64; N], f64),

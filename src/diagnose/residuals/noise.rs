@@ -117,14 +117,30 @@ pub(crate) fn median(mut v: Vec<f64>) -> f64 {
     v[v.len() / 2]
 }
 
-/// Lower bound of a sensor's noise estimate, so that a noise-free record does not divide
-/// by zero (`None` for the command, which no sensor reads).
+/// Lower bounds of the noise estimates, so that a noise-free record does not divide by
+/// zero: orders of magnitude below any real sensor's noise (the TREES Lab LVDT's is 20 um),
+/// so only a noise-free record reaches them.
+mod lower_bound {
+    /// LVDT, m (1 nm).
+    pub const DISPLACEMENT_M: f64 = 1e-9;
+    /// Accelerometer, m/s^2.
+    pub const ACCELERATION_M_S2: f64 = 1e-6;
+    /// Load cell, N (1 mN).
+    pub const FORCE_N: f64 = 1e-3;
+    /// Spool, of the rated opening.
+    pub const SPOOL: f64 = 1e-7;
+    /// The valve command's floor, in the command's unit.
+    pub const VALVE_COMMAND: f64 = 1e-7;
+}
+
+/// Lower bound of a sensor's noise estimate ([`lower_bound`]; `None` for the command,
+/// which no sensor reads).
 fn sensor_lower_bound(ch: Channel) -> Option<f64> {
     match ch {
-        Channel::Displacement => Some(1e-9),
-        Channel::Acceleration => Some(1e-6),
-        Channel::Force => Some(1e-3),
-        Channel::Spool => Some(1e-7),
+        Channel::Displacement => Some(lower_bound::DISPLACEMENT_M),
+        Channel::Acceleration => Some(lower_bound::ACCELERATION_M_S2),
+        Channel::Force => Some(lower_bound::FORCE_N),
+        Channel::Spool => Some(lower_bound::SPOOL),
         Channel::ValveCommand => None,
     }
 }
@@ -185,7 +201,7 @@ pub fn estimate_noise(c: &Campaign) -> NoiseFloor {
         acceleration_m_s2: floor(Acceleration, sensor[Acceleration]),
         force_n: floor(Force, sensor[Force]),
         spool: floor(Spool, sensor[Spool]),
-        valve_command: floor(ValveCommand, from_gains).max(1e-7),
+        valve_command: floor(ValveCommand, from_gains).max(lower_bound::VALVE_COMMAND),
         sensor: SensorLevels {
             displacement_m: sensor[Displacement],
             acceleration_m_s2: sensor[Acceleration],

@@ -173,6 +173,11 @@ pub(super) fn white_variance(noise: &NoiseFloor, ch: Channel, floor: f64) -> f64
     if ch == Channel::Spool {
         noise.measurement(ch).powi(2)
     } else {
-        1e-6 * floor.powi(2)
+        TINY_WHITE_VARIANCE * floor.powi(2)
     }
 }
+
+/// The white variance [`white_variance`] gives a channel other than the spool, as a share
+/// of its floor's square: a thousandth of the floor's RMS, so that no band's variance is
+/// zero while the prediction's own spread dominates.
+const TINY_WHITE_VARIANCE: f64 = 1e-6;

@@ -5,7 +5,6 @@
 
 use super::super::signals::welch_for;
 use crate::campaign::{Campaign, Control};
-use crate::linear::OilColumn;
 use crate::params::Params;
 use num_complex::Complex64;
 
@@ -211,16 +210,15 @@ pub fn with_oil_column(p: &Params, frequency_hz: f64, damping_ratio: f64) -> Par
     let mut q = *p;
     let a = &mut q.actuator;
     let m = q.table.mass_kg;
-    a.bulk_modulus_pa =
-        OilColumn::bulk_modulus_pa(frequency_hz, m, a.piston_area_m2, a.total_oil_volume_m3);
-    a.leakage_m3_s_pa =
-        damping_ratio * a.piston_area_m2 / (a.bulk_modulus_pa * m / a.total_oil_volume_m3).sqrt();
+    a.bulk_modulus_pa = a.bulk_modulus_for_frequency_pa(frequency_hz, m);
+    a.leakage_m3_s_pa = a.leakage_for_damping_ratio_m3_s_pa(m, damping_ratio);
     q
 }
 
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::linear::OilColumn;
 
     #[test]
     fn the_oil_column_set_is_the_one_read_back() {
