@@ -180,7 +180,7 @@ fn fit_on_score(
 /// candidates that explain about as much, the one with fewer parameters ranks first (a
 /// parameter more can always absorb a little of chance); 1 % each stays small beside the
 /// [`super::REQUIRED_GAIN`] a cause must show.
-const PENALTY_PER_PARAMETER: f64 = 0.01;
+pub(super) const PENALTY_PER_PARAMETER: f64 = 0.01;
 
 impl Candidate {
     /// Its selection residual, deviation and score over the cells `select_mask` keeps (the

@@ -41,7 +41,7 @@ pub struct CellScores {
 
 /// Degrees of freedom a score window holds in its band (`2 W L / fs`): its length is
 /// chosen for it (at least [`SCORE_WINDOW`]), so a narrow low band gets long windows.
-pub(super) const WINDOW_DOF: f64 = 8.0;
+pub const WINDOW_DOF: f64 = 8.0;
 
 /// Mean over windows of `P_meas/P_pred` and of `ln(P_pred/reference)` for one band:
 /// `meas` the band's residual, `spread` its predicted spread per realisation, `white` the

@@ -413,7 +413,10 @@ mod tests {
         let y: Vec<f64> = (0..100).map(|k| (k as f64 * 0.3).sin() + 5.0).collect();
         let (e, rms) = nrmse(&y, &y).unwrap();
         assert!(e < 1e-12);
-        assert!((rms - std::f64::consts::FRAC_1_SQRT_2).abs() < 0.02, "{rms}");
+        assert!(
+            (rms - std::f64::consts::FRAC_1_SQRT_2).abs() < 0.02,
+            "{rms}"
+        );
         // an offset alone is not an error (the sensor's zero)
         let shifted: Vec<f64> = y.iter().map(|v| v - 3.0).collect();
         assert!(nrmse(&y, &shifted).unwrap().0 < 1e-12);
