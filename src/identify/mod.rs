@@ -311,22 +311,28 @@ fn unused_by_valve(model: crate::params::ServovalveModel, key: &str) -> bool {
     }
 }
 
+/// A short campaign of the simulator's TREES Lab table for the estimators' unit tests:
+/// the named tests of the paper's program (seed 1), with 12 s of random.
+#[cfg(test)]
+pub(crate) fn short_test_campaign(tests: &[&str]) -> Campaign {
+    use crate::campaign::synth::{synthesise, SynthOptions};
+    let opts = SynthOptions {
+        random_duration_s: 12.0,
+        tests: Some(tests.iter().map(|t| t.to_string()).collect()),
+        ..SynthOptions::default()
+    };
+    synthesise(&crate::params::Params::trees_lab(), &opts, None)
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::campaign::synth::{synthesise, SynthOptions};
-    use crate::params::Params;
 
     /// The diagnosis's identification ([`Scope::Parameters`]) identifies the same model as
     /// the complete one and leaves out the device fit, which only the latter attempts.
     #[test]
     fn the_parameters_scope_identifies_the_same_model_without_the_device() {
-        let opts = SynthOptions {
-            random_duration_s: 12.0,
-            tests: Some(vec!["R2".into()]),
-            ..SynthOptions::default()
-        };
-        let screened = screen(&synthesise(&Params::trees_lab(), &opts, None));
+        let screened = screen(&short_test_campaign(&["R2"]));
         let complete = identify_screened_with(&screened, Scope::Complete);
         let parameters = identify_screened(&screened);
         assert_eq!(parameters.params, complete.params);

@@ -213,7 +213,7 @@ impl ValveFrf {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::campaign::synth::{synthesise, SynthOptions};
+    use crate::identify::short_test_campaign;
     use crate::params::Params;
 
     /// On the simulator's valve test (R1, seed 1, 12 s of random), the FRF fit finds the
@@ -221,12 +221,7 @@ mod tests {
     #[test]
     fn the_valve_test_gives_the_simulated_valve() {
         let truth = Params::trees_lab().servovalve;
-        let opts = SynthOptions {
-            random_duration_s: 12.0,
-            tests: Some(vec!["R1".into()]),
-            ..SynthOptions::default()
-        };
-        let c = synthesise(&Params::trees_lab(), &opts, None);
+        let c = short_test_campaign(&["R1"]);
         let fit = fit_servovalve("R1", &c.records[0], c.sample_rate_of(0)).unwrap();
         // one parameter more is worth it: the second order's error is a twentieth of the
         // first's (0.03 against 0.56)

@@ -212,7 +212,7 @@ pub fn refine_servovalve(
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::campaign::synth::{synthesise, SynthOptions};
+    use crate::identify::short_test_campaign;
     use crate::params::Params;
 
     /// From a valve 10 % off in gain and 20 % off in frequency, the output-error fit of
@@ -220,12 +220,7 @@ mod tests {
     #[test]
     fn the_spool_fit_returns_to_the_simulated_valve() {
         let truth = Params::trees_lab().servovalve;
-        let opts = SynthOptions {
-            random_duration_s: 12.0,
-            tests: Some(vec!["R1".into()]),
-            ..SynthOptions::default()
-        };
-        let c = synthesise(&Params::trees_lab(), &opts, None);
+        let c = short_test_campaign(&["R1"]);
         let mut start = truth;
         start.gain *= 1.1;
         start.natural_frequency_hz *= 0.8;
