@@ -52,6 +52,11 @@ const RESTARTS: usize = 3;
 /// factor's complement.
 const IMPROVEMENT: f64 = 0.8;
 
+/// The point the polish moves: the gap and the rod's mass (the effect's fitted
+/// parameters, in the catalogue's order), then [`POLISHED`] in its order (the oil column
+/// first). This is the one place that knows the layout.
+const EFFECT_LEN: usize = 2;
+
 /// Free play on the predictive score (see [`residuals`]): the table bounces inside the
 /// gap after each crossing, chaotically, so the sample-wise residual is rough at the
 /// scale of a percent in any parameter (finite differences stall), while the score's
@@ -69,123 +74,185 @@ pub(super) fn fit_free_play(
     start: &[f64],
     ctx: &FitContext,
 ) -> Option<(f64, Vec<f64>, Params)> {
-    let (c, noise) = (ctx.c, ctx.noise);
-    let e = Effect::FreePlay;
-    let trace = |what: &str| {
-        if super::trace_enabled() {
-            eprintln!("  free_play {what}");
-        }
-    };
-    trace(&format!("start: {start:?}"));
-    let (lower, upper) = e.bounds(&bases[0]);
-    // the gap held within the reading's span: beyond it the nearest gap in the span
-    let gap_span = [start[0] / GAP_READ_SPAN, start[0] * GAP_READ_SPAN];
-    // a table mass that is only a scale stays where the baseline holds it
-    let mass_held = POLISHED
-        .iter()
-        .position(|w| *w == BaselineParameter::TableMass)
-        .filter(|_| mass_is_scale(c))
-        .map(|k| (2 + k, bases[0].table.mass_kg));
-    let held = |x: &[f64]| {
-        let mut y = x.to_vec();
-        y[0] = y[0].clamp(gap_span[0], gap_span[1]);
-        if let Some((at, m)) = mass_held {
-            y[at] = m;
-        }
-        y
-    };
-    let mut ranges: Vec<Range> = POLISHED
-        .iter()
-        .map(|&w| candidate_range(bases, w))
-        .collect();
-    // the point polished: gap, rod mass, then [`POLISHED`] in its order (the oil column
-    // first); the oil column as stiff as the largest factor on the stiffest base
-    let stiffest = bases
-        .iter()
-        .map(|b| b.actuator.bulk_modulus_pa)
-        .fold(0.0, f64::max);
-    let most = OIL_COLUMN_FACTORS[OIL_COLUMN_FACTORS.len() - 1];
-    ranges[0].upper = ranges[0].upper.max(most * stiffest);
-    let model = |base: &Params, x: &[f64]| {
-        let mut p = *base;
-        e.apply(&mut p, &x[..2]);
-        for (w, v) in POLISHED.iter().zip(&x[2..]) {
-            w.set(&mut p, *v);
-        }
-        p
-    };
-    let inside = |x: &[f64]| {
-        (0..2).all(|k| (lower[k]..=upper[k]).contains(&x[k]))
-            && ranges
-                .iter()
-                .zip(&x[2..])
-                .all(|(r, v)| (r.lower..=r.upper).contains(v))
-    };
-    let score = |base: &Params, x: &[f64]| {
-        let x = held(x);
-        if !inside(&x) {
-            return f64::INFINITY;
-        }
-        residuals::score_sum(&model(base, &x), c, sig, noise, Part::Fit)
-    };
-    // the best base with its oil column stiffened
-    let (x0, base, first) = bases
-        .iter()
-        .flat_map(|b| OIL_COLUMN_FACTORS.iter().map(move |&f| (b, f)))
-        .map(|(b, f)| {
-            let mut x: Vec<f64> = start.to_vec();
-            x.extend(POLISHED.iter().map(|w| w.get(b)));
-            x[2] = (x[2] * f).min(ranges[0].upper);
-            let s = score(b, &x);
-            (x, *b, s)
-        })
-        .min_by(|a, b| a.2.total_cmp(&b.2))?;
-    if !first.is_finite() {
-        return None;
-    }
-    // Nelder-Mead restarted while it gains; every point it keeps has its gap held, so
-    // `best` below never leaves the reading's span (the start is the reading itself)
-    let polish = |base: &Params, mut best: (f64, Vec<f64>)| {
-        for _ in 0..RESTARTS {
-            match nelder_mead(&|x: &[f64]| score(base, x), &best.1, best.0) {
-                Some((x, s)) if s < IMPROVEMENT * best.0 => best = (s, held(&x)),
-                Some((x, s)) if s < best.0 => return (s, held(&x)),
-                _ => break,
-            }
-        }
-        best
-    };
-    let mut best = polish(&base, (first, x0));
+    let fit = PlayFit::new(bases, sig, start, ctx);
+    fit.trace(&format!("start: {start:?}"));
+    let (x0, base, first) = fit.best_start(bases, start)?;
+    let mut best = fit.polish(&base, (first, x0));
     let mut base = base;
-    trace(&format!("polished: {best:?}"));
+    fit.trace(&format!("polished: {best:?}"));
     // the baseline unbent by output error with the play held (section 4 and the
     // refinement bent the friction, mass and leakage to absorb its impacts), then
     // polished again while the score improves
     for _ in 0..UNBENDING_ROUNDS {
-        let Some(unbent) = refine_output_error(
-            c,
-            &model(&base, &best.1),
-            &[(e, &best.1[..2])],
-            &bases[0],
-            ctx.fit_idx,
-            ctx.whitening,
-            UNBENDING_ITERATIONS,
-        ) else {
+        let Some((next, unbent)) = fit.unbent(&base, &best, &bases[0]) else {
             break;
         };
-        let mut x = best.1.clone();
-        for (k, (w, r)) in POLISHED.iter().zip(&ranges).enumerate() {
-            x[2 + k] = w.get(&unbent.params).clamp(r.lower, r.upper);
-        }
-        let next = polish(&unbent.params, (score(&unbent.params, &x), x));
-        trace(&format!("unbent and polished: {next:?}"));
+        fit.trace(&format!("unbent and polished: {next:?}"));
         if next.0 >= best.0 {
             break;
         }
-        (best, base) = (next, unbent.params);
+        (best, base) = (next, unbent);
     }
-    let p = model(&base, &best.1);
-    Some((best.0, best.1[..2].to_vec(), p))
+    let p = fit.model(&base, &best.1);
+    Some((best.0, best.1[..EFFECT_LEN].to_vec(), p))
+}
+
+/// A score and the point it was taken at.
+type Scored = (f64, Vec<f64>);
+
+/// What the free play's polish works on: the campaign, the signature tests, the bounds
+/// of the effect and of [`POLISHED`], and what is held (the gap near its reading, a table
+/// mass that is only a scale).
+struct PlayFit<'a> {
+    ctx: &'a FitContext<'a>,
+    sig: &'a [usize],
+    lower: Vec<f64>,
+    upper: Vec<f64>,
+    ranges: Vec<Range>,
+    gap_span: [f64; 2],
+    mass_held: Option<(usize, f64)>,
+}
+
+impl<'a> PlayFit<'a> {
+    fn new(bases: &[Params], sig: &'a [usize], start: &[f64], ctx: &'a FitContext<'a>) -> Self {
+        let (lower, upper) = Effect::FreePlay.bounds(&bases[0]);
+        // the gap held within the reading's span: beyond it the nearest gap in the span
+        let gap_span = [start[0] / GAP_READ_SPAN, start[0] * GAP_READ_SPAN];
+        // a table mass that is only a scale stays where the baseline holds it
+        let mass_held = POLISHED
+            .iter()
+            .position(|w| *w == BaselineParameter::TableMass)
+            .filter(|_| mass_is_scale(ctx.c))
+            .map(|k| (EFFECT_LEN + k, bases[0].table.mass_kg));
+        let mut ranges: Vec<Range> = POLISHED
+            .iter()
+            .map(|&w| candidate_range(bases, w))
+            .collect();
+        // the oil column as stiff as the largest factor on the stiffest base
+        let stiffest = bases
+            .iter()
+            .map(|b| b.actuator.bulk_modulus_pa)
+            .fold(0.0, f64::max);
+        let most = OIL_COLUMN_FACTORS[OIL_COLUMN_FACTORS.len() - 1];
+        ranges[0].upper = ranges[0].upper.max(most * stiffest);
+        PlayFit {
+            ctx,
+            sig,
+            lower,
+            upper,
+            ranges,
+            gap_span,
+            mass_held,
+        }
+    }
+
+    fn trace(&self, what: &str) {
+        if super::trace_enabled() {
+            eprintln!("  free_play {what}");
+        }
+    }
+
+    /// `x` with the gap in its span and a held table mass at its value.
+    fn held(&self, x: &[f64]) -> Vec<f64> {
+        let mut y = x.to_vec();
+        y[0] = y[0].clamp(self.gap_span[0], self.gap_span[1]);
+        if let Some((at, m)) = self.mass_held {
+            y[at] = m;
+        }
+        y
+    }
+
+    /// `base` with the play and [`POLISHED`] set from `x`.
+    fn model(&self, base: &Params, x: &[f64]) -> Params {
+        let mut p = *base;
+        Effect::FreePlay.apply(&mut p, &x[..EFFECT_LEN]);
+        for (w, v) in POLISHED.iter().zip(&x[EFFECT_LEN..]) {
+            w.set(&mut p, *v);
+        }
+        p
+    }
+
+    fn inside(&self, x: &[f64]) -> bool {
+        (0..EFFECT_LEN).all(|k| (self.lower[k]..=self.upper[k]).contains(&x[k]))
+            && self
+                .ranges
+                .iter()
+                .zip(&x[EFFECT_LEN..])
+                .all(|(r, v)| (r.lower..=r.upper).contains(v))
+    }
+
+    /// The predictive score of `x` on `base` over the signature tests' fitting halves
+    /// (held first; infinite outside the bounds).
+    fn score(&self, base: &Params, x: &[f64]) -> f64 {
+        let x = self.held(x);
+        if !self.inside(&x) {
+            return f64::INFINITY;
+        }
+        residuals::score_sum(
+            &self.model(base, &x),
+            self.ctx.c,
+            self.sig,
+            self.ctx.noise,
+            Part::Fit,
+        )
+    }
+
+    /// The best base with its oil column stiffened by [`OIL_COLUMN_FACTORS`]: its point,
+    /// the base and the score; `None` when no start scores finite.
+    fn best_start(&self, bases: &[Params], start: &[f64]) -> Option<(Vec<f64>, Params, f64)> {
+        let (x0, base, first) = bases
+            .iter()
+            .flat_map(|b| OIL_COLUMN_FACTORS.iter().map(move |&f| (b, f)))
+            .map(|(b, f)| {
+                let mut x: Vec<f64> = start.to_vec();
+                x.extend(POLISHED.iter().map(|w| w.get(b)));
+                x[EFFECT_LEN] = (x[EFFECT_LEN] * f).min(self.ranges[0].upper);
+                let s = self.score(b, &x);
+                (x, *b, s)
+            })
+            .min_by(|a, b| a.2.total_cmp(&b.2))?;
+        first.is_finite().then_some((x0, base, first))
+    }
+
+    /// Nelder-Mead restarted while it gains; every point it keeps has its gap held, so
+    /// the result never leaves the reading's span (the start is the reading itself).
+    fn polish(&self, base: &Params, mut best: Scored) -> Scored {
+        for _ in 0..RESTARTS {
+            match nelder_mead(&|x: &[f64]| self.score(base, x), &best.1, best.0) {
+                Some((x, s)) if s < IMPROVEMENT * best.0 => best = (s, self.held(&x)),
+                Some((x, s)) if s < best.0 => return (s, self.held(&x)),
+                _ => break,
+            }
+        }
+        best
+    }
+
+    /// The baseline unbent by output error on the fitting tests with the play of `best`
+    /// held, then polished: the polished point and the unbent baseline, `None` when the
+    /// refinement fails.
+    fn unbent(
+        &self,
+        base: &Params,
+        best: &Scored,
+        first_base: &Params,
+    ) -> Option<(Scored, Params)> {
+        let e = Effect::FreePlay;
+        let unbent = refine_output_error(
+            self.ctx.c,
+            &self.model(base, &best.1),
+            &[(e, &best.1[..EFFECT_LEN])],
+            first_base,
+            self.ctx.fit_idx,
+            self.ctx.whitening,
+            UNBENDING_ITERATIONS,
+        )?;
+        let mut x = best.1.clone();
+        for (k, (w, r)) in POLISHED.iter().zip(&self.ranges).enumerate() {
+            x[EFFECT_LEN + k] = w.get(&unbent.params).clamp(r.lower, r.upper);
+        }
+        let next = self.polish(&unbent.params, (self.score(&unbent.params, &x), x));
+        Some((next, unbent.params))
+    }
 }
 
 /// Nelder-Mead (argmin) over the logs of `x0`'s entries with [`STEPS`]; the best point

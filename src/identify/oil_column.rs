@@ -1,7 +1,7 @@
 //! The oil column from the spool-to-force FRF of the oil-column test (paper 4.1.3).
 
 use super::error::IdentifyError;
-use super::frf::CrossSpectra;
+use super::frf::{CrossSpectra, FrfEstimate};
 use super::lsq::{minimise, LsqOptions};
 use super::mass::fit_mass;
 use super::results::{FrfData, OilColumnFit};
@@ -172,28 +172,15 @@ pub fn fit_oil_column(
     mass_kg: f64,
     valve: Option<&ValveTf>,
 ) -> Result<OilColumnFit, IdentifyError> {
-    let x = spool_channel(rec).ok_or_else(|| IdentifyError::MissingChannel {
-        test: name.to_string(),
-        channel: "spool_position",
-        consequence: "oil column not identified",
-    })?;
-    const WITHOUT: &str = "oil column not identified";
-    let u = channel(name, rec, Measured::ValveCommand, WITHOUT)?;
-    let force = channel(name, rec, Measured::Force, WITHOUT)?;
-    let acceleration = channel(name, rec, Measured::Acceleration, WITHOUT)?;
-    check_random_length(name, rec, fs, "oil-column fit")?;
-    check_bounds(
-        name,
-        "mass used by the oil-column fit (kg)",
-        mass_kg,
-        MASS_BOUNDS_KG,
-    )?;
+    let ch = OilColumnChannels::read(name, rec, fs, mass_kg)?;
     let w = welch_for(fs, rec.len()).map_err(|e| IdentifyError::failed(name, e))?;
     let failed = |e| IdentifyError::failed(name, e);
-    let iv = w.frf_instrumental(u, x, force).map_err(failed)?;
+    let iv = w
+        .frf_instrumental(ch.command, ch.spool, ch.force)
+        .map_err(failed)?;
     let own = fit_mass(name, rec, fs)?;
     let apparent = w
-        .frf_instrumental(&rec.ref_acceleration_m_s2, acceleration, force)
+        .frf_instrumental(&rec.ref_acceleration_m_s2, ch.acceleration, ch.force)
         .map_err(failed)?;
     let table = TableStiffness {
         apparent_kg: apparent.h1,
@@ -204,7 +191,7 @@ pub fn fit_oil_column(
         Some(v) => (
             OilColumnInput::CommandThroughValve,
             fit_stiffness_and_leakage(
-                &CrossSpectra::new(&w, u, u, force).map_err(failed)?,
+                &CrossSpectra::new(&w, ch.command, ch.command, ch.force).map_err(failed)?,
                 &table,
                 geometry,
                 &|s| v.response(s),
@@ -213,7 +200,7 @@ pub fn fit_oil_column(
         None => (
             OilColumnInput::SpoolWithInstrument,
             fit_stiffness_and_leakage(
-                &CrossSpectra::new(&w, u, x, force).map_err(failed)?,
+                &CrossSpectra::new(&w, ch.command, ch.spool, ch.force).map_err(failed)?,
                 &table,
                 geometry,
                 &|_| Complex64::new(1.0, 0.0),
@@ -227,46 +214,114 @@ pub fn fit_oil_column(
         )
     })?;
     // H1 from the noisy spool, for the report's comparison
-    let h1fit = CrossSpectra::new(&w, x, x, force).ok().and_then(|h1| {
-        fit_stiffness_and_leakage(&h1, &table, geometry, &|_| Complex64::new(1.0, 0.0))
-    });
-    let figures = |k_oil: f64, leak: f64| {
-        let fitted = geometry.actuator(k_oil, leak);
-        let f = (k_oil / mass_kg).sqrt() / (2.0 * PI);
-        let zeta = fitted.oil_column_damping_ratio(mass_kg);
-        (f, zeta, fitted.bulk_modulus_pa)
-    };
-    let (f_oil, zeta, beta) = figures(fit.theta[0], fit.theta[1]);
-    check_bounds(
+    let h1fit = CrossSpectra::new(&w, ch.spool, ch.spool, ch.force)
+        .ok()
+        .and_then(|h1| {
+            fit_stiffness_and_leakage(&h1, &table, geometry, &|_| Complex64::new(1.0, 0.0))
+        });
+    let fitted = FittedColumn {
         name,
-        "oil-column frequency (Hz)",
-        f_oil,
-        FREQUENCY_BOUNDS_HZ,
-    )?;
-    check_bounds(name, "oil-column damping ratio", zeta, DAMPING_BOUNDS)?;
-    check_bounds(name, "bulk modulus (Pa)", beta, [1e6, 1e11])?;
-    let (h1f, h1z) = h1fit
-        .map(|f| {
-            let (a, b, _) = figures(f.theta[0], f.theta[1]);
-            (a, b)
+        geometry,
+        mass_kg,
+    };
+    fitted.result(&fit, h1fit.as_ref(), input, &iv)
+}
+
+/// The channels the oil-column fit reads from R3, checked (spool, command, force and
+/// acceleration recorded, a long enough random record, a mass inside its bounds).
+struct OilColumnChannels<'r> {
+    spool: &'r [f64],
+    command: &'r [f64],
+    force: &'r [f64],
+    acceleration: &'r [f64],
+}
+
+impl<'r> OilColumnChannels<'r> {
+    fn read(name: &str, rec: &'r Record, fs: f64, mass_kg: f64) -> Result<Self, IdentifyError> {
+        const WITHOUT: &str = "oil column not identified";
+        let spool = spool_channel(rec).ok_or_else(|| IdentifyError::MissingChannel {
+            test: name.to_string(),
+            channel: "spool_position",
+            consequence: WITHOUT,
+        })?;
+        let command = channel(name, rec, Measured::ValveCommand, WITHOUT)?;
+        let force = channel(name, rec, Measured::Force, WITHOUT)?;
+        let acceleration = channel(name, rec, Measured::Acceleration, WITHOUT)?;
+        check_random_length(name, rec, fs, "oil-column fit")?;
+        check_bounds(
+            name,
+            "mass used by the oil-column fit (kg)",
+            mass_kg,
+            MASS_BOUNDS_KG,
+        )?;
+        Ok(OilColumnChannels {
+            spool,
+            command,
+            force,
+            acceleration,
         })
-        .unwrap_or((f64::NAN, f64::NAN));
-    let rel_k = fit.sigma[0] / fit.theta[0];
-    Ok(OilColumnFit {
-        test: name.to_string(),
-        frequency_hz: f_oil,
-        damping_ratio: zeta,
-        bulk_modulus_pa: beta,
-        leakage_m3_s_pa: fit.theta[1],
-        stiffness_n_m: fit.theta[0],
-        flow_gain_scale: fit.theta[2],
-        sigma_frequency_hz: 0.5 * rel_k * f_oil,
-        sigma_damping_ratio: zeta * (fit.sigma[1] / fit.theta[1].max(1e-300)).hypot(0.5 * rel_k),
-        sigma_bulk_modulus_pa: rel_k * beta,
-        h1_frequency_hz: h1f,
-        h1_damping_ratio: h1z,
-        measured: FrfData::from(&iv.frequency_hz, &iv.h1, &iv.coherence, [1.0, 60.0]),
-        mass_used_kg: mass_kg,
-        input,
-    })
+    }
+}
+
+/// A fitted `[k_oil, C_l, flow-gain scale]` read as the oil column of a table of
+/// `mass_kg`: its frequency, damping ratio and bulk modulus, checked against their bounds.
+struct FittedColumn<'a> {
+    name: &'a str,
+    geometry: &'a OilGeometry,
+    mass_kg: f64,
+}
+
+impl FittedColumn<'_> {
+    /// Frequency, damping ratio and bulk modulus of a stiffness and leakage.
+    fn figures(&self, k_oil: f64, leak: f64) -> (f64, f64, f64) {
+        let fitted = self.geometry.actuator(k_oil, leak);
+        let f = (k_oil / self.mass_kg).sqrt() / (2.0 * PI);
+        let zeta = fitted.oil_column_damping_ratio(self.mass_kg);
+        (f, zeta, fitted.bulk_modulus_pa)
+    }
+
+    /// The fit's result with its uncertainty, the H1 fit's figures beside it.
+    fn result(
+        &self,
+        fit: &lsq::LsqFit,
+        h1fit: Option<&lsq::LsqFit>,
+        input: OilColumnInput,
+        iv: &FrfEstimate,
+    ) -> Result<OilColumnFit, IdentifyError> {
+        let name = self.name;
+        let (f_oil, zeta, beta) = self.figures(fit.theta[0], fit.theta[1]);
+        check_bounds(
+            name,
+            "oil-column frequency (Hz)",
+            f_oil,
+            FREQUENCY_BOUNDS_HZ,
+        )?;
+        check_bounds(name, "oil-column damping ratio", zeta, DAMPING_BOUNDS)?;
+        check_bounds(name, "bulk modulus (Pa)", beta, [1e6, 1e11])?;
+        let (h1f, h1z) = h1fit
+            .map(|f| {
+                let (a, b, _) = self.figures(f.theta[0], f.theta[1]);
+                (a, b)
+            })
+            .unwrap_or((f64::NAN, f64::NAN));
+        let rel_k = fit.sigma[0] / fit.theta[0];
+        Ok(OilColumnFit {
+            test: name.to_string(),
+            frequency_hz: f_oil,
+            damping_ratio: zeta,
+            bulk_modulus_pa: beta,
+            leakage_m3_s_pa: fit.theta[1],
+            stiffness_n_m: fit.theta[0],
+            flow_gain_scale: fit.theta[2],
+            sigma_frequency_hz: 0.5 * rel_k * f_oil,
+            sigma_damping_ratio: zeta
+                * (fit.sigma[1] / fit.theta[1].max(1e-300)).hypot(0.5 * rel_k),
+            sigma_bulk_modulus_pa: rel_k * beta,
+            h1_frequency_hz: h1f,
+            h1_damping_ratio: h1z,
+            measured: FrfData::from(&iv.frequency_hz, &iv.h1, &iv.coherence, [1.0, 60.0]),
+            mass_used_kg: self.mass_kg,
+            input,
+        })
+    }
 }
