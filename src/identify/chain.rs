@@ -11,7 +11,7 @@ use super::{
     ServovalveFit, TriangleFit, Validation, RESOLUTION_HZ,
 };
 use crate::campaign::screen::{Action, Screening};
-use crate::campaign::Campaign;
+use crate::campaign::{Campaign, Record};
 use crate::linear::ValveTf;
 use crate::params::{ActuatorModel, Params};
 
@@ -123,10 +123,7 @@ impl<'a> Chain<'a> {
     fn servovalve(&mut self) -> Option<ServovalveFit> {
         let c = self.c;
         let fit = match self.roles.valve {
-            Some(i) => {
-                let name = test_name(c, i);
-                in_file(c, name, fit_servovalve(name, &c.records[i], c.sample_rate_of(i)))
-            }
+            Some(i) => fit_on_test(c, i, fit_servovalve),
             None => Err(absent_role(
                 self.s,
                 "valve test (a random test recording the valve command and the spool)",
@@ -193,10 +190,7 @@ impl<'a> Chain<'a> {
     fn mass_random(&mut self) -> Option<MassFit> {
         let c = self.c;
         let fit = match self.roles.mass {
-            Some(i) => {
-                let name = test_name(c, i);
-                in_file(c, name, fit_mass(name, &c.records[i], c.sample_rate_of(i)))
-            }
+            Some(i) => fit_on_test(c, i, fit_mass),
             None => Err(absent_role(
                 self.s,
                 "mass test (a random test besides the valve test)",
@@ -333,6 +327,17 @@ fn absent_role(s: &Screening, role: &str, what: &str) -> IdentifyError {
             .collect(),
         consequence: what.to_string(),
     }
+}
+
+/// The estimator `fit` on test `i` (its name, record and sample rate), its error naming
+/// the test's file.
+fn fit_on_test<T>(
+    c: &Campaign,
+    i: usize,
+    fit: fn(&str, &Record, f64) -> Result<T, IdentifyError>,
+) -> Result<T, IdentifyError> {
+    let name = test_name(c, i);
+    in_file(c, name, fit(name, &c.records[i], c.sample_rate_of(i)))
 }
 
 /// `r` with the file of test `name` added to its error.
