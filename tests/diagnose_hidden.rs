@@ -309,7 +309,7 @@ fn check_modes(n_modes: usize, committed: u64) {
             }
             break (spec, truth);
         };
-        let (o, v) = diagnose_synthesised(&base, &[spec.clone()], seed);
+        let (o, v) = diagnose_synthesised(&base, std::slice::from_ref(&spec), seed);
         let modes = &o.parameters["modes"];
         eprintln!(
             "{spec} (seed {seed}): causes {:?}, modes {modes}, gain {:.2}",

@@ -74,7 +74,7 @@ fn quick_diagnosis_names_and_fits_a_specimen() {
         let spec = format!(
             "specimen:mass_kg={mass_kg},frequency_hz={frequency_hz},damping_ratio={damping}"
         );
-        synthesise(&dir, &[spec.clone()], seed);
+        synthesise(&dir, std::slice::from_ref(&spec), seed);
         let v = quick_diagnosis(&dir);
         assert_eq!(v["causes"][0]["effect"], "specimen", "{spec}: {v:#}");
         let p = &v["causes"][0]["parameters"];

@@ -223,7 +223,7 @@ fn validation_peak_is_searched_in_the_validation_band() {
     let v = identify(&c).validation.unwrap();
     let p = v.measured_figures.unwrap().peak_hz;
     assert!(
-        p >= VALIDATION_BAND_HZ[0] && p <= VALIDATION_BAND_HZ[1],
+        (VALIDATION_BAND_HZ[0]..=VALIDATION_BAND_HZ[1]).contains(&p),
         "measured peak {p} Hz"
     );
     // the table's peak (oil column, 14.2 Hz for the defaults) within a few bins

@@ -153,7 +153,7 @@ fn check(id: &Identification) {
     for key in ["mass_kg", "mass_random_kg", "mass_periodic_kg"] {
         if let Some(m) = j["table"][key].as_f64() {
             assert!(
-                m >= MASS_BOUNDS_KG[0] && m <= MASS_BOUNDS_KG[1],
+                (MASS_BOUNDS_KG[0]..=MASS_BOUNDS_KG[1]).contains(&m),
                 "{key} {m}"
             );
         }

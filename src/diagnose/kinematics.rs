@@ -218,6 +218,15 @@ fn describe(k: &KinematicCheck) -> Option<String> {
     })
 }
 
+/// One coherent bin of [`read_pair`]: its angular frequency, the response's phase and log
+/// gain, and the inverse-variance weight its coherence gives.
+struct Bin {
+    w_rad_s: f64,
+    phase_rad: f64,
+    log_gain: f64,
+    weight: f64,
+}
+
 /// One test: the frequency response from the LVDT's second derivative to the
 /// accelerometer (Welch, Hann segments), over the bins of `band_hz` where the two are
 /// coherent ([`MIN_COHERENCE`]), read as one gain and one delay: the delay from the
@@ -240,7 +249,7 @@ fn read_pair(x: &[f64], a: &[f64], fs: f64, band_hz: [f64; 2]) -> Option<PairRea
     let options = WelchOptions::for_resolution(fs, RESOLUTION_HZ).fit_to(xdd.len(), MIN_SEGMENTS);
     let est = Welch::new(fs, options).ok()?.frf(xdd, a).ok()?;
     let segments = est.segments as f64;
-    let bins: Vec<(f64, f64, f64, f64)> = est
+    let bins: Vec<Bin> = est
         .band(band_hz[0], band_hz[1])
         .into_iter()
         .filter(|&k| est.coherence[k] >= MIN_COHERENCE)
@@ -249,18 +258,28 @@ fn read_pair(x: &[f64], a: &[f64], fs: f64, band_hz: [f64; 2]) -> Option<PairRea
             let weight = 2.0 * segments * g2 / (1.0 - g2).max(1e-12);
             let w = 2.0 * PI * est.frequency_hz[k];
             let log_gain = 0.5 * (est.h1[k].norm() * est.h2[k].norm()).ln();
-            (w, est.h1[k].arg(), log_gain, weight)
+            Bin {
+                w_rad_s: w,
+                phase_rad: est.h1[k].arg(),
+                log_gain,
+                weight,
+            }
         })
-        .filter(|b| b.0 > 0.0 && b.1.is_finite() && b.2.is_finite())
+        .filter(|b| b.w_rad_s > 0.0 && b.phase_rad.is_finite() && b.log_gain.is_finite())
         .collect();
     if bins.len() < MIN_BINS {
         return None;
     }
-    let sum = |f: &dyn Fn(&(f64, f64, f64, f64)) -> f64| bins.iter().map(f).sum::<f64>();
-    let (sww, sw) = (sum(&|b| b.3 * b.0 * b.0), sum(&|b| b.3));
-    let lag_s = -sum(&|b| b.3 * b.0 * b.1) / sww;
-    let log_ratio = sum(&|b| b.3 * b.2) / sw;
-    let chi2 = sum(&|b| b.3 * ((b.1 + b.0 * lag_s).powi(2) + (b.2 - log_ratio).powi(2)));
+    let sum = |f: &dyn Fn(&Bin) -> f64| bins.iter().map(f).sum::<f64>();
+    let (sww, sw) = (
+        sum(&|b| b.weight * b.w_rad_s * b.w_rad_s),
+        sum(&|b| b.weight),
+    );
+    let lag_s = -sum(&|b| b.weight * b.w_rad_s * b.phase_rad) / sww;
+    let log_ratio = sum(&|b| b.weight * b.log_gain) / sw;
+    let chi2 = sum(&|b| {
+        b.weight * ((b.phase_rad + b.w_rad_s * lag_s).powi(2) + (b.log_gain - log_ratio).powi(2))
+    });
     Some(PairReading {
         test: String::new(),
         ratio: log_ratio.exp(),

@@ -173,8 +173,8 @@ mod tests {
         // four cycles from a rising zero: a peak and a trough each, the last trough a
         // quarter cycle before the end
         assert_eq!(turns(&path), 8);
-        for k in 0..n {
-            assert!((path[k] - sine(k)).abs() < threshold + 2e-3, "{k}");
+        for (k, x) in path.iter().enumerate().take(n) {
+            assert!((x - sine(k)).abs() < threshold + 2e-3, "{k}");
         }
     }
 

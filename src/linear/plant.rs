@@ -44,13 +44,13 @@ impl Plant {
                 names.extend(SPECIMEN_STATE_NAMES[k]);
             }
         }
-        let fnd = p.foundation.enabled.then(|| names.len());
+        let fnd = p.foundation.enabled.then_some(names.len());
         if fnd.is_some() {
             names.extend(["foundation_x", "foundation_v"]);
         }
         // free play: the contact linearised as engaged when the gap is 0; with a gap the
         // rod rests inside it and the small-signal model joins rod and table rigidly
-        let rod = engaged_free_play(p).then(|| names.len());
+        let rod = engaged_free_play(p).then_some(names.len());
         if rod.is_some() {
             names.extend(["rod_x", "rod_v"]);
         }

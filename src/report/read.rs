@@ -16,7 +16,7 @@ fn lower(x: impl std::fmt::Debug) -> String {
 /// A sample value with five significant digits (millimetres of stroke in metres too).
 fn value(x: f64) -> String {
     match x.abs() {
-        a if a == 0.0 => "0".into(),
+        0.0 => "0".into(),
         a if (0.1..1e5).contains(&a) => format!("{x:.4}"),
         _ => format!("{x:.4e}"),
     }

@@ -33,7 +33,7 @@ impl Row {
     /// The error as shown: percent, or absolute against a zero truth.
     fn error_text(&self) -> String {
         match (self.error(), self.truth) {
-            (Some(e), Some(t)) if t == 0.0 => format!("{} abs", fmt(e)),
+            (Some(e), Some(0.0)) => format!("{} abs", fmt(e)),
             (Some(e), _) => format!("{e:+.2} %"),
             _ => String::new(),
         }

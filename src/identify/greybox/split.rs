@@ -18,7 +18,7 @@ fn richness(c: &Campaign, i: usize) -> (u8, usize) {
 pub fn split(c: &Campaign, tests: &[usize]) -> (Vec<usize>, Vec<usize>) {
     let mut ranked = tests.to_vec();
     // stable: equal richness keeps campaign order
-    ranked.sort_by(|&a, &b| richness(c, b).cmp(&richness(c, a)));
+    ranked.sort_by_key(|&a| std::cmp::Reverse(richness(c, a)));
     let (mut est, mut val): (Vec<usize>, Vec<usize>) = (Vec::new(), Vec::new());
     for (k, i) in ranked.into_iter().enumerate() {
         if k % 2 == 0 {
