@@ -134,10 +134,21 @@ pub fn measured_curve(c: &Campaign, base: &Params, tests: &[usize]) -> Vec<Curve
         .collect()
 }
 
-/// `(F_mu, r_s, v_s)` fitted to the measured curve (each bin weighted by its samples),
-/// or None when the curve has too few bins or no fit converges. A curve without a
-/// static peak gives `r_s` near 1.
-pub fn fit_curve(curve: &[CurvePoint]) -> Option<[f64; 3]> {
+/// The friction-velocity curve's parameters, `F_mu (1 + (r_s - 1) exp(-(v/v_s)^2))`.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct CurveFit {
+    /// The kinetic friction amplitude `F_mu`, N.
+    pub kinetic_n: f64,
+    /// The static ratio `r_s`.
+    pub static_ratio: f64,
+    /// The Stribeck velocity `v_s`, m/s.
+    pub stribeck_velocity_m_s: f64,
+}
+
+/// The curve fitted to the measured one (each bin weighted by its samples), or None when
+/// the curve has too few bins or no fit converges. A curve without a static peak gives
+/// `r_s` near 1.
+pub fn fit_curve(curve: &[CurvePoint]) -> Option<CurveFit> {
     if curve.len() < MIN_CURVE_BINS {
         return None;
     }
@@ -175,7 +186,12 @@ pub fn fit_curve(curve: &[CurvePoint]) -> Option<[f64; 3]> {
             parallel: false,
         },
     )?;
-    Some([fit.theta[0], fit.theta[1], fit.theta[2]])
+    // the least-squares vector's layout: the start's above
+    Some(CurveFit {
+        kinetic_n: fit.theta[0],
+        static_ratio: fit.theta[1],
+        stribeck_velocity_m_s: fit.theta[2],
+    })
 }
 
 #[cfg(test)]
@@ -202,13 +218,15 @@ mod tests {
             .unwrap();
         let sig: Vec<usize> = (0..18).collect();
         let c = synthesise(&sticky, &opts, None);
-        let [f, r, v] = fit_curve(&measured_curve(&c, &truth, &sig)).unwrap();
+        let fit = fit_curve(&measured_curve(&c, &truth, &sig)).unwrap();
+        let (f, r, v) = (fit.kinetic_n, fit.static_ratio, fit.stribeck_velocity_m_s);
         assert!((f / 4000.0 - 1.0).abs() < 0.03, "F_mu {f}");
         assert!((r / 2.2 - 1.0).abs() < 0.2, "r_s {r}");
         assert!((v / 0.005 - 1.0).abs() < 0.5, "v_s {v}");
         truth.stick_slip.enabled = false;
         let c = synthesise(&truth, &opts, None);
-        let [f, r, _] = fit_curve(&measured_curve(&c, &truth, &sig)).unwrap();
+        let fit = fit_curve(&measured_curve(&c, &truth, &sig)).unwrap();
+        let (f, r) = (fit.kinetic_n, fit.static_ratio);
         assert!((f / 4000.0 - 1.0).abs() < 0.03, "F_mu {f}");
         assert!(r < 1.1, "bare table r_s {r}");
     }
