@@ -434,8 +434,7 @@ fn refinement_range(p: &Params, which: BaselineParameter, c: &Campaign) -> Range
 }
 
 /// What [`refine_output_error`] gives: the cost, the refined parameters, the iterations
-/// used, and the freed effects' one-sigma uncertainties and fitting bounds (empty
-/// without one).
+/// used, and each freed effect's one-sigma uncertainties and fitting bounds.
 pub(super) struct Refined {
     pub cost: f64,
     pub params: Params,
@@ -538,9 +537,8 @@ fn refinement_free(c: &Campaign, p0: &Params) -> Vec<BaselineParameter> {
         .collect()
 }
 
-/// The effects a refinement frees (not [`super::effect::Effect::fitted_on_score`]): their values
-/// lead the fit's vector, in the order given, with their bounds for the table. This and
-/// [`Refinement::params`] are the one place that knows that layout.
+/// The effects a refinement frees (not fitted on the score), their values leading the
+/// fit's vector in the order given, with their bounds: the one place of that layout.
 struct FreedEffects<'a> {
     effects: Vec<(&'a EffectValues, EffectBounds)>,
     start: Vec<f64>,
@@ -591,8 +589,7 @@ impl<'a> FreedEffects<'a> {
     }
 }
 
-/// What a refinement fits: the freed effects' parameters, then the free baseline
-/// parameters, on `p0`.
+/// What a refinement fits on `p0`: the freed effects' values, then the free baseline's.
 struct Refinement<'a> {
     p0: &'a Params,
     effects: FreedEffects<'a>,

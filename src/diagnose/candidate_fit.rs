@@ -8,6 +8,7 @@ use super::baseline::{
 };
 use super::candidates::{scored_candidate, FitContext, FitTrace, Fitted};
 use super::effect::Effect;
+use super::effect_table::TakesOut;
 use super::effect_values::{EffectBounds, EffectValues};
 use super::output::Candidate;
 use super::starts::{informed_start, keep_each_frequency, starts};
@@ -229,17 +230,22 @@ impl<'a> CandidateFit<'a> {
             which.set(&mut fixed, which.get(&self.bases[1]));
         }
         let e = self.e;
-        if let Some(m_kg) = e.newest_mode_mass().and_then(|k| s.try_get(k)) {
-            fixed.table.mass_kg = table_mass_under_specimen(fixed.table.mass_kg, m_kg);
-        }
-        if e.is(&crate::effects::foundation::EFFECT) {
-            let k_id = b.actuator.oil_column_stiffness_n_m();
-            let (mass_kg, frequency_hz) = (s.try_get("mass_kg"), s.try_get("frequency_hz"));
-            if let Some(factor) = mass_kg
-                .zip(frequency_hz)
-                .and_then(|(m, f)| oil_column_factor_under_foundation(k_id, m, f))
-            {
-                fixed.actuator.bulk_modulus_pa *= factor;
+        match e.row().takes_out {
+            TakesOut::Nothing => {}
+            TakesOut::NewestModeMass => {
+                if let Some(m_kg) = e.newest_mode_mass().and_then(|k| s.try_get(k)) {
+                    fixed.table.mass_kg = table_mass_under_specimen(fixed.table.mass_kg, m_kg);
+                }
+            }
+            TakesOut::FoundationSpring => {
+                let k_id = b.actuator.oil_column_stiffness_n_m();
+                let (mass_kg, frequency_hz) = (s.try_get("mass_kg"), s.try_get("frequency_hz"));
+                if let Some(factor) = mass_kg
+                    .zip(frequency_hz)
+                    .and_then(|(m, f)| oil_column_factor_under_foundation(k_id, m, f))
+                {
+                    fixed.actuator.bulk_modulus_pa *= factor;
+                }
             }
         }
         Start {

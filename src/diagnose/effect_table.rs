@@ -1,6 +1,6 @@
 //! What the diagnosis knows of each effect beyond its catalogue entry (spec section 7):
 //! its starts, the start read off the data, which fit it takes, the frequency whose
-//! starts lie in different valleys. One row per effect in [`TABLE`]: adding an effect to
+//! starts lie in different valleys, what its starts take out of the identified baseline. One row per effect in [`TABLE`]: adding an effect to
 //! the catalogue ([`crate::effects`]) adds one row here (a unit test checks that the rows
 //! cover the catalogue exactly, by name).
 
@@ -30,6 +30,18 @@ pub(super) enum FitKind {
     FreePlay,
 }
 
+/// What the identified baseline already holds of an effect, which a start of its
+/// output-error fit takes out ([`super::candidate_fit`]): the baseline was identified
+/// without it and bent to absorb it.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub(super) enum TakesOut {
+    Nothing,
+    /// The identified table mass holds the specimen's newest mode's mass at low frequency.
+    NewestModeMass,
+    /// The identified oil column is the oil and the foundation's spring in series.
+    FoundationSpring,
+}
+
 /// What an effect's starts are read from: the effect, the campaign, the base they start
 /// on, and the start read off the data ([`Row::informed`]), which may seed the spread.
 pub(super) struct StartsFrom<'a> {
@@ -56,6 +68,8 @@ pub(super) struct Row {
     /// newest mode's (the first mode's starts lie at one frequency when read off the
     /// apparent mass, on a blind grid without it).
     pub valley_frequency: Option<&'static str>,
+    /// What its starts take out of the identified baseline.
+    pub takes_out: TakesOut,
 }
 
 /// Every effect the diagnosis fits: the catalogue's, in any order (the search takes the
@@ -69,6 +83,7 @@ pub(super) static TABLE: [Row; 10] = [
         starts: |s| specimen_starts(s.c, s.base.table.mass_kg),
         informed: None,
         valley_frequency: Some("frequency_hz"),
+        takes_out: TakesOut::NewestModeMass,
     },
     Row {
         catalogue: &effects::foundation::EFFECT,
@@ -77,6 +92,7 @@ pub(super) static TABLE: [Row; 10] = [
         starts: |s| foundation_starts(s.base.table.mass_kg, s.informed),
         informed: Some(|s| foundation_start(s.c, s.base.table.mass_kg)),
         valley_frequency: Some("frequency_hz"),
+        takes_out: TakesOut::FoundationSpring,
     },
     Row {
         catalogue: &effects::stick_slip::EFFECT,
@@ -85,6 +101,7 @@ pub(super) static TABLE: [Row; 10] = [
         starts: |_| stick_slip_grid(),
         informed: None,
         valley_frequency: None,
+        takes_out: TakesOut::Nothing,
     },
     Row {
         catalogue: &effects::flow_saturation::EFFECT,
@@ -93,6 +110,7 @@ pub(super) static TABLE: [Row; 10] = [
         starts: |s| vec![one_value(s.effect, flow_limit_start(s.c, s.base))],
         informed: None,
         valley_frequency: None,
+        takes_out: TakesOut::Nothing,
     },
     Row {
         catalogue: &effects::valve_deadband::EFFECT,
@@ -101,6 +119,7 @@ pub(super) static TABLE: [Row; 10] = [
         starts: |s| deadband_grid(s.effect),
         informed: None,
         valley_frequency: None,
+        takes_out: TakesOut::Nothing,
     },
     Row {
         catalogue: &effects::friction_asymmetry::EFFECT,
@@ -110,6 +129,7 @@ pub(super) static TABLE: [Row; 10] = [
         starts: |s| asymmetry_grid(s.effect),
         informed: Some(|s| friction_ratio_start(s.c, s.base).map(|r| one_value(s.effect, r))),
         valley_frequency: None,
+        takes_out: TakesOut::Nothing,
     },
     Row {
         catalogue: &effects::flow_asymmetry::EFFECT,
@@ -118,6 +138,7 @@ pub(super) static TABLE: [Row; 10] = [
         starts: |s| asymmetry_grid(s.effect),
         informed: Some(|s| flow_ratio_start(s.c).map(|r| one_value(s.effect, r))),
         valley_frequency: None,
+        takes_out: TakesOut::Nothing,
     },
     Row {
         catalogue: &effects::free_play::EFFECT,
@@ -127,6 +148,7 @@ pub(super) static TABLE: [Row; 10] = [
         starts: |_| Vec::new(),
         informed: Some(|s| free_play_start(s.c, s.base, ROD_MASS_FRACTION * s.base.table.mass_kg)),
         valley_frequency: None,
+        takes_out: TakesOut::Nothing,
     },
     Row {
         catalogue: &effects::specimen::TWO_MODES,
@@ -135,6 +157,7 @@ pub(super) static TABLE: [Row; 10] = [
         starts: |s| higher_mode_starts(s.effect, s.c, s.base),
         informed: None,
         valley_frequency: Some("mode2.frequency_hz"),
+        takes_out: TakesOut::NewestModeMass,
     },
     Row {
         catalogue: &effects::specimen::THREE_MODES,
@@ -143,6 +166,7 @@ pub(super) static TABLE: [Row; 10] = [
         starts: |s| higher_mode_starts(s.effect, s.c, s.base),
         informed: None,
         valley_frequency: Some("mode3.frequency_hz"),
+        takes_out: TakesOut::NewestModeMass,
     },
 ];
 
