@@ -1,7 +1,7 @@
 //! The baseline's output-error refinement: the parameters it frees, their bounds, and
 //! the band-normalised residual vector every least-squares fit of diagnosis minimises.
 
-use super::effect::Effect;
+use super::effect_values::{EffectBounds, EffectValues};
 use super::part::Part;
 use super::residuals::{simulate_test, Whitening};
 use crate::campaign::Campaign;
@@ -434,13 +434,18 @@ fn refinement_range(p: &Params, which: BaselineParameter, c: &Campaign) -> Range
 }
 
 /// What [`refine_output_error`] gives: the cost, the refined parameters, the iterations
-/// used, and the effect's one-sigma uncertainties and fitting bounds (empty without one).
+/// used, and each freed effect's one-sigma uncertainties and fitting bounds.
 pub(super) struct Refined {
     pub cost: f64,
     pub params: Params,
     pub iterations: usize,
-    pub effect_sigma: Vec<f64>,
-    pub effect_bounds: (Vec<f64>, Vec<f64>),
+    pub effects: Vec<FreedFit>,
+}
+
+/// A freed effect of a refinement: its one-sigma uncertainties and fitting bounds.
+pub(super) struct FreedFit {
+    pub sigma: EffectValues,
+    pub bounds: EffectBounds,
 }
 
 /// Output-error refinement of `p0` on the fitting halves of `tests`: the baseline
@@ -448,14 +453,14 @@ pub(super) struct Refined {
 /// nobody gave freed), [`REFINED_FRICTION`] and [`REFINED_SPRING`] (these two only with a
 /// force channel) and the valve dynamics within their refinement ranges, and every effect
 /// of `effects`, its parameters from the values given (held, in `p0`, for an effect
-/// [`Effect::fitted_on_score`]) within their bounds for the table `table`. The
+/// [`super::effect::Effect::fitted_on_score`]) within their bounds for the table `table`. The
 /// iterations are capped at `iterations`: a baseline that lacks an effect does not
-/// converge and need not. [`Refined::effect_sigma`] and `effect_bounds` list the freed
-/// effects' parameters in the order given.
+/// converge and need not. [`Refined::effects`] lists the freed effects in the order
+/// given.
 pub(super) fn refine_output_error(
     c: &Campaign,
     p0: &Params,
-    effects: &[(Effect, &[f64])],
+    effects: &[EffectValues],
     table: &Params,
     tests: &[usize],
     whitening: &Whitening,
@@ -498,8 +503,7 @@ pub(super) fn refine_output_error(
         cost: fit.cost,
         params: refinement.params(&fit.theta),
         iterations: fit.iterations,
-        effect_sigma: fit.sigma[..ne].to_vec(),
-        effect_bounds: (e.lower.clone(), e.upper.clone()),
+        effects: e.fits(&fit.sigma[..ne]),
     })
 }
 
@@ -533,43 +537,59 @@ fn refinement_free(c: &Campaign, p0: &Params) -> Vec<BaselineParameter> {
         .collect()
 }
 
-/// The effects a refinement frees (not [`Effect::fitted_on_score`]): their parameters
-/// lead the fit's vector, in the order given, with their bounds for the table.
+/// The effects a refinement frees (not fitted on the score), their values leading the
+/// fit's vector in the order given, with their bounds: the one place of that layout.
 struct FreedEffects<'a> {
-    effects: Vec<(Effect, &'a [f64])>,
+    effects: Vec<(&'a EffectValues, EffectBounds)>,
     start: Vec<f64>,
     lower: Vec<f64>,
     upper: Vec<f64>,
 }
 
 impl<'a> FreedEffects<'a> {
-    fn new(effects: &[(Effect, &'a [f64])], table: &Params) -> Self {
-        let effects: Vec<(Effect, &[f64])> = effects
+    fn new(effects: &'a [EffectValues], table: &Params) -> Self {
+        let effects: Vec<(&EffectValues, EffectBounds)> = effects
             .iter()
-            .filter(|(e, _)| !e.fitted_on_score())
-            .copied()
+            .filter(|v| !v.effect().fitted_on_score())
+            .map(|v| (v, v.effect().bounds(table)))
             .collect();
-        let start: Vec<f64> = effects
-            .iter()
-            .flat_map(|(_, t)| t.iter().copied())
-            .collect();
-        let (mut lower, mut upper) = (Vec::new(), Vec::new());
-        for (e, _) in &effects {
-            let (lo, hi) = e.bounds(table);
-            lower.extend(lo);
-            upper.extend(hi);
-        }
+        let laid_out = |f: for<'x> fn(&'x (&EffectValues, EffectBounds)) -> &'x [f64]| {
+            effects
+                .iter()
+                .flat_map(|e| f(e).iter().copied())
+                .collect::<Vec<f64>>()
+        };
         FreedEffects {
+            start: laid_out(|(v, _)| v.layout()),
+            lower: laid_out(|(_, b)| b.lower.layout()),
+            upper: laid_out(|(_, b)| b.upper.layout()),
             effects,
-            start,
-            lower,
-            upper,
         }
+    }
+
+    /// The freed effects' values laid out in `t` (the fit's vector), each in turn.
+    fn values<'t>(&'t self, t: &'t [f64]) -> impl Iterator<Item = EffectValues> + 't {
+        let mut at = 0;
+        self.effects.iter().map(move |(v, _)| {
+            let n = v.layout().len();
+            at += n;
+            EffectValues::from_layout(v.effect(), &t[at - n..at])
+        })
+    }
+
+    /// Each freed effect's uncertainties (`sigma`, laid out like the start) and bounds.
+    fn fits(&self, sigma: &[f64]) -> Vec<FreedFit> {
+        self.values(sigma)
+            .zip(&self.effects)
+            .map(|(sigma, (_, bounds))| FreedFit {
+                sigma,
+                bounds: bounds.clone(),
+            })
+            .collect()
     }
 }
 
-/// What a refinement fits: the freed effects' parameters, then the free baseline
-/// parameters, on `p0`.
+/// What a refinement fits on `p0`: the freed effects' values, then the free baseline's.
 struct Refinement<'a> {
     p0: &'a Params,
     effects: FreedEffects<'a>,
@@ -580,10 +600,8 @@ impl Refinement<'_> {
     /// `p0` with the fit's vector `t` set.
     fn params(&self, t: &[f64]) -> Params {
         let mut p = *self.p0;
-        let mut at = 0;
-        for (e, theta) in &self.effects.effects {
-            e.apply(&mut p, &t[at..at + theta.len()]);
-            at += theta.len();
+        for values in self.effects.values(t) {
+            values.apply(&mut p);
         }
         let ne = self.effects.start.len();
         for (k, which) in self.free.iter().enumerate() {

@@ -8,6 +8,8 @@ use super::baseline::{
 };
 use super::candidates::{scored_candidate, FitContext, FitTrace, Fitted};
 use super::effect::Effect;
+use super::effect_table::TakesOut;
+use super::effect_values::{EffectBounds, EffectValues};
 use super::output::Candidate;
 use super::starts::{informed_start, keep_each_frequency, starts};
 use crate::campaign::Campaign;
@@ -45,10 +47,10 @@ fn candidate_free(c: &Campaign, base: &Params) -> Vec<BaselineParameter> {
 }
 
 /// The layout of a candidate fit's free vector, the one place that knows it: the
-/// effect's parameters in their declaration order ([`Effect::parameters`]), then the free
-/// baseline parameters ([`candidate_free`]) in theirs, each with its range.
+/// effect's parameters in their declaration order ([`EffectValues::layout`]), then the
+/// free baseline parameters ([`candidate_free`]) in theirs, each with its range.
 struct FreeLayout {
-    effect_len: usize,
+    effect: Effect,
     baseline: Vec<BaselineParameter>,
     ranges: Vec<Range>,
 }
@@ -61,7 +63,7 @@ impl FreeLayout {
             .map(|&w| candidate_range(bases, w))
             .collect();
         FreeLayout {
-            effect_len: e.parameters().len(),
+            effect: e,
             baseline,
             ranges,
         }
@@ -69,12 +71,23 @@ impl FreeLayout {
 
     /// The effect's part and the free baseline part of `t`.
     fn split<'t>(&self, t: &'t [f64]) -> (&'t [f64], &'t [f64]) {
-        t.split_at(self.effect_len)
+        t.split_at(self.effect.parameters().len())
     }
 
-    /// The free vector of the effect's parameters `effect` and the free baseline values
+    /// The effect's values in `t`.
+    fn effect_of(&self, t: &[f64]) -> EffectValues {
+        EffectValues::from_layout(self.effect, self.split(t).0)
+    }
+
+    /// The free vector of the effect's values `effect` and the free baseline values
     /// `baseline`.
-    fn join(&self, effect: &[f64], baseline: &[f64]) -> Vec<f64> {
+    fn join(&self, effect: &EffectValues, baseline: &[f64]) -> Vec<f64> {
+        self.join_raw(effect.layout(), baseline)
+    }
+
+    /// [`FreeLayout::join`] of a vector laid out like the effect's values (its bounds,
+    /// its scales).
+    fn join_raw(&self, effect: &[f64], baseline: &[f64]) -> Vec<f64> {
         effect.iter().chain(baseline).copied().collect()
     }
 
@@ -91,13 +104,13 @@ impl FreeLayout {
     }
 
     /// The lower bounds: the effect's `effect_lower`, then the baseline's ranges'.
-    fn lower(&self, effect_lower: &[f64]) -> Vec<f64> {
+    fn lower(&self, effect_lower: &EffectValues) -> Vec<f64> {
         let baseline: Vec<f64> = self.ranges.iter().map(|r| r.lower).collect();
         self.join(effect_lower, &baseline)
     }
 
     /// The upper bounds: the effect's `effect_upper`, then the baseline's ranges'.
-    fn upper(&self, effect_upper: &[f64]) -> Vec<f64> {
+    fn upper(&self, effect_upper: &EffectValues) -> Vec<f64> {
         let baseline: Vec<f64> = self.ranges.iter().map(|r| r.upper).collect();
         self.join(effect_upper, &baseline)
     }
@@ -112,14 +125,15 @@ impl FreeLayout {
             .map(|x| x.abs().max(MIN_EFFECT_SCALE))
             .collect();
         let baseline: Vec<f64> = self.ranges.iter().map(|r| r.scale).collect();
-        self.join(&effect, &baseline)
+        self.join_raw(&effect, &baseline)
     }
 }
 
-/// A start of a candidate's fit: the free vector ([`FreeLayout`]: the effect's and the
-/// free baseline parameters), and the parameters the other baseline parameters are taken
-/// from.
+/// A start of a candidate's fit: the effect's values, the free vector ([`FreeLayout`]:
+/// the effect's and the free baseline parameters), and the parameters the other baseline
+/// parameters are taken from.
 struct Start {
+    effect: EffectValues,
     free: Vec<f64>,
     fixed: Params,
 }
@@ -154,8 +168,8 @@ pub(super) struct CandidateFit<'a> {
     ctx: &'a FitContext<'a>,
     trace: &'a FitTrace,
     layout: FreeLayout,
-    /// The effect's own fitting bounds (lower, upper), which judge it as evidence.
-    effect_bounds: (Vec<f64>, Vec<f64>),
+    /// The effect's own fitting bounds, which judge it as evidence.
+    effect_bounds: EffectBounds,
     lower: Vec<f64>,
     upper: Vec<f64>,
 }
@@ -170,8 +184,8 @@ impl<'a> CandidateFit<'a> {
     ) -> CandidateFit<'a> {
         let layout = FreeLayout::new(e, ctx.c, bases);
         let effect_bounds = e.bounds(&bases[0]);
-        let lower = layout.lower(&effect_bounds.0);
-        let upper = layout.upper(&effect_bounds.1);
+        let lower = layout.lower(&effect_bounds.lower);
+        let upper = layout.upper(&effect_bounds.upper);
         CandidateFit {
             e,
             bases,
@@ -188,9 +202,9 @@ impl<'a> CandidateFit<'a> {
     /// The model of the free vector `t`: the effect's parameters on the refined
     /// baseline, the other baseline parameters from `fixed`, then the free ones.
     fn assemble(&self, t: &[f64], fixed: &Params) -> Params {
-        let (effect, baseline) = self.layout.split(t);
+        let baseline = self.layout.split(t).1;
         let mut p = self.bases[0];
-        self.e.apply(&mut p, effect);
+        self.layout.effect_of(t).apply(&mut p);
         copy_baseline(fixed, &mut p);
         self.layout.set_baseline(&mut p, baseline);
         p
@@ -210,26 +224,32 @@ impl<'a> CandidateFit<'a> {
     /// whichever base the start comes from (the friction's yield and shape stay the
     /// base's own: the refined ones may have bent to absorb the effect, the section-4
     /// ones have not), and what the identified baseline holds of the effect taken out.
-    fn start_on(&self, b: &Params, s: &[f64]) -> Start {
+    fn start_on(&self, b: &Params, s: &EffectValues) -> Start {
         let mut fixed = *b;
         for which in BaselineParameter::VALVE {
             which.set(&mut fixed, which.get(&self.bases[1]));
         }
         let e = self.e;
-        if let Some(m_kg) = e.newest_mode_mass().and_then(|k| e.value_of(s, k)) {
-            fixed.table.mass_kg = table_mass_under_specimen(fixed.table.mass_kg, m_kg);
-        }
-        if e == Effect::Foundation {
-            let k_id = b.actuator.oil_column_stiffness_n_m();
-            let (mass_kg, frequency_hz) = (e.value_of(s, "mass_kg"), e.value_of(s, "frequency_hz"));
-            if let Some(factor) = mass_kg
-                .zip(frequency_hz)
-                .and_then(|(m, f)| oil_column_factor_under_foundation(k_id, m, f))
-            {
-                fixed.actuator.bulk_modulus_pa *= factor;
+        match e.row().takes_out {
+            TakesOut::Nothing => {}
+            TakesOut::NewestModeMass => {
+                if let Some(m_kg) = e.newest_mode_mass().and_then(|k| s.try_get(k)) {
+                    fixed.table.mass_kg = table_mass_under_specimen(fixed.table.mass_kg, m_kg);
+                }
+            }
+            TakesOut::FoundationSpring => {
+                let k_id = b.actuator.oil_column_stiffness_n_m();
+                let (mass_kg, frequency_hz) = (s.try_get("mass_kg"), s.try_get("frequency_hz"));
+                if let Some(factor) = mass_kg
+                    .zip(frequency_hz)
+                    .and_then(|(m, f)| oil_column_factor_under_foundation(k_id, m, f))
+                {
+                    fixed.actuator.bulk_modulus_pa *= factor;
+                }
             }
         }
         Start {
+            effect: s.clone(),
             free: self.layout.join(s, &self.layout.baseline_of(&fixed)),
             fixed,
         }
@@ -238,7 +258,7 @@ impl<'a> CandidateFit<'a> {
     /// Every start of the effect on every baseline, screened by one evaluation each
     /// when there are more than the effort fits (a resonance keeps the best start at each
     /// of its frequencies too); `informed` (read off the data) seeds the spread.
-    fn screened_starts(&self, informed: Option<&[f64]>) -> Vec<Start> {
+    fn screened_starts(&self, informed: Option<&EffectValues>) -> Vec<Start> {
         let mut all: Vec<Start> = Vec::new();
         for b in self.bases {
             for s in starts(self.e, self.ctx.c, b, informed) {
@@ -260,11 +280,11 @@ impl<'a> CandidateFit<'a> {
             "screened starts: {:?}",
             scored
                 .iter()
-                .map(|s| (s.0, self.layout.split(&s.1.free).0))
+                .map(|s| (s.0, s.1.effect.layout()))
                 .collect::<Vec<_>>()
         ));
         match self.e.valley_frequency() {
-            Some(k) => keep_each_frequency(scored, keep, |s| self.layout.split(&s.free).0[k]),
+            Some(key) => keep_each_frequency(scored, keep, |s| s.effect.get(key)),
             None => scored.into_iter().take(keep).map(|x| x.1).collect(),
         }
     }
@@ -273,7 +293,8 @@ impl<'a> CandidateFit<'a> {
     /// start (the baseline has bent to absorb the effect; unbent, the joint fit starts
     /// downhill). The free vector unbent, or the start's when the fit fails.
     fn unbent(&self, start: &Start, scale: &[f64]) -> Vec<f64> {
-        let (effect, baseline) = self.layout.split(&start.free);
+        let baseline = self.layout.split(&start.free).1;
+        let effect = &start.effect;
         let aligned = minimise(
             |tb| self.residuals(&self.layout.join(effect, tb), &start.fixed),
             baseline,
@@ -322,9 +343,10 @@ impl<'a> CandidateFit<'a> {
     pub(super) fn fit(&self) -> Option<Candidate> {
         // the start read off the data (its frequency also seeds the screened spread)
         let informed = informed_start(self.e, self.ctx.c, &self.bases[1]);
-        let mut all = self.screened_starts(informed.as_deref());
+        let mut all = self.screened_starts(informed.as_ref());
         if let Some(s) = informed {
-            self.trace.say(&format!("start from the data: {s:?}"));
+            self.trace
+                .say(&format!("start from the data: {:?}", s.layout()));
             all.push(self.start_on(&self.bases[1], &s));
         }
         let mut best: Option<(LsqFit, Params)> = None;
@@ -342,8 +364,8 @@ impl<'a> CandidateFit<'a> {
             self.e,
             ctx.c,
             Fitted {
-                theta: self.layout.split(&f.theta).0,
-                sigma: self.layout.split(&f.sigma).0,
+                values: &self.layout.effect_of(&f.theta),
+                sigma: Some(&self.layout.effect_of(&f.sigma)),
                 bounds: &self.effect_bounds,
                 fit_residual: f.cost.sqrt(),
                 params: p,
@@ -365,19 +387,23 @@ mod tests {
     #[test]
     fn the_start_adjustments_find_their_parameters() {
         for (e, n) in [
-            (Effect::Specimen, 1),
-            (Effect::SpecimenTwoModes, 2),
-            (Effect::SpecimenThreeModes, 3),
+            (Effect::of(&crate::effects::specimen::EFFECT), 1),
+            (Effect::specimen(2).unwrap(), 2),
+            (Effect::specimen(3).unwrap(), 3),
         ] {
-            let s: Vec<f64> = (0..e.parameters().len()).map(|k| k as f64).collect();
+            let layout: Vec<f64> = (0..e.parameters().len()).map(|k| k as f64).collect();
+            let s = EffectValues::from_layout(e, &layout);
             let key = e.newest_mode_mass().unwrap();
-            assert_eq!(e.value_of(&s, key), Some(s[3 * (n - 1)]));
+            assert_eq!(s.try_get(key), Some(layout[3 * (n - 1)]));
         }
-        let f = Effect::Foundation;
-        let s = [2e5, 12.0, 0.05];
-        assert_eq!(f.value_of(&s, "mass_kg"), Some(s[0]));
-        assert_eq!(f.value_of(&s, "frequency_hz"), Some(s[1]));
-        assert_eq!(Effect::ValveDeadband.newest_mode_mass(), None);
+        let f = Effect::of(&crate::effects::foundation::EFFECT);
+        let s = EffectValues::from_layout(f, &[2e5, 12.0, 0.05]);
+        assert_eq!(s.try_get("mass_kg"), Some(2e5));
+        assert_eq!(s.try_get("frequency_hz"), Some(12.0));
+        assert_eq!(
+            Effect::of(&crate::effects::valve_deadband::EFFECT).newest_mode_mass(),
+            None
+        );
     }
 
     /// A specimen's start leaves the table at least its share; a soft foundation leaves

@@ -5,6 +5,8 @@
 use super::baseline::from_motion;
 use super::candidate_fit::CandidateFit;
 use super::effect::Effect;
+use super::effect_table::FitKind;
+use super::effect_values::{EffectBounds, EffectValues};
 use super::effort::Effort;
 use super::evidence::not_evidence;
 use super::free_play_fit::fit_free_play;
@@ -131,9 +133,9 @@ fn fitted_tests(e: Effect, c: &Campaign, table: &Params, fit_idx: &[usize]) -> O
 pub(super) fn fit_candidate(e: Effect, bases: &[Params], ctx: &FitContext) -> Option<Candidate> {
     let sig = fitted_tests(e, ctx.c, &bases[0], ctx.fit_idx)?;
     let trace = FitTrace::begin(e);
-    match e {
-        Effect::StickSlip | Effect::FreePlay => fit_on_score(e, bases, &sig, ctx, &trace),
-        _ => CandidateFit::new(e, bases, &sig, ctx, &trace).fit(),
+    match e.row().fit {
+        FitKind::OutputError => CandidateFit::new(e, bases, &sig, ctx, &trace).fit(),
+        FitKind::StickSlip | FitKind::FreePlay => fit_on_score(e, bases, &sig, ctx, &trace),
     }
 }
 
@@ -147,8 +149,8 @@ fn fit_on_score(
     ctx: &FitContext,
     trace: &FitTrace,
 ) -> Option<Candidate> {
-    let (score, theta, p) = match e {
-        Effect::StickSlip => fit_stick_slip(&bases[0], sig, ctx)?,
+    let fit = match e.row().fit {
+        FitKind::StickSlip => fit_stick_slip(&bases[0], sig, ctx)?,
         _ => {
             // without a gap read off the reversals there is no play to fit: its impacts
             // are chaotic, and a fit from a guess lands wherever the bounces misfit least
@@ -159,16 +161,20 @@ fn fit_on_score(
             fit_free_play(bases, sig, &start, ctx)?
         }
     };
-    trace.say(&format!("fitted: score {score:.1}, {theta:?}"));
+    trace.say(&format!(
+        "fitted: score {:.1}, {:?}",
+        fit.score,
+        fit.values.layout()
+    ));
     Some(scored_candidate(
         e,
         ctx.c,
         Fitted {
-            theta: &theta,
-            sigma: &[],
+            values: &fit.values,
+            sigma: None,
             bounds: &e.bounds(&bases[0]),
-            fit_residual: score.sqrt(),
-            params: p,
+            fit_residual: fit.score.sqrt(),
+            params: fit.params,
         },
         ctx.heldout_idx,
         ctx.noise,
@@ -200,13 +206,21 @@ impl Candidate {
     }
 }
 
+/// A fit on the predictive score ([`fit_on_score`]): the score, the effect's values and
+/// the model.
+pub(super) struct ScoreFit {
+    pub score: f64,
+    pub values: EffectValues,
+    pub params: Params,
+}
+
 /// What a fit gives a candidate: the effect's parameters and their one-sigma
-/// uncertainties (empty when the fit gives none), the fit's RMS residual, the model.
+/// uncertainties (`None` when the fit gives none), the fit's RMS residual, the model.
 pub(super) struct Fitted<'a> {
-    pub theta: &'a [f64],
-    pub sigma: &'a [f64],
-    /// The fitting range it was fitted in: lower and upper bounds, one per parameter.
-    pub bounds: &'a (Vec<f64>, Vec<f64>),
+    pub values: &'a EffectValues,
+    pub sigma: Option<&'a EffectValues>,
+    /// The fitting range it was fitted in.
+    pub bounds: &'a EffectBounds,
     pub fit_residual: f64,
     pub params: Params,
 }
@@ -223,10 +237,9 @@ pub(super) fn scored_candidate(
 ) -> Candidate {
     let p = fitted.params;
     let (select, report) = heldout_scores(&p, c, heldout_idx, noise, Some(hold));
-    let parameters = e.keyed(fitted.theta);
-    let sigma = e.sigma_map(fitted.sigma);
-    let (lower, upper) = fitted.bounds;
-    let why = not_evidence(e, &parameters, &sigma, lower, upper);
+    let parameters = fitted.values.finite_map();
+    let sigma = fitted.sigma.map(EffectValues::map).unwrap_or_default();
+    let why = not_evidence(e, &parameters, &sigma, fitted.bounds);
     Candidate {
         effect: e,
         parameters,

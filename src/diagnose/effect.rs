@@ -1,6 +1,8 @@
 //! The catalogue effects diagnosis fits (spec section 7): names, parameters, where
 //! their signature lives, how they are read from and applied to parameters, fitting bounds.
 
+use super::effect_table::{FitKind, Row, TABLE};
+use super::effect_values::{EffectBounds, EffectValues};
 use super::residuals::Channel;
 use crate::campaign::{Campaign, Measured, TestKind};
 use crate::effects::SignatureTests;
@@ -8,76 +10,89 @@ use crate::identify::select::{excitation_roles, sine_split, slowest_first};
 use crate::params::Params;
 use serde::Serialize;
 
-/// Catalogue effects (spec section 7).
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize)]
-#[serde(rename_all = "snake_case")]
-pub enum Effect {
-    Specimen,
-    Foundation,
-    StickSlip,
-    FlowSaturation,
-    ValveDeadband,
-    FrictionAsymmetry,
-    FlowAsymmetry,
-    FreePlay,
-    /// The specimen with a second mode, fitted on a one-mode specimen candidate; named
-    /// `specimen` in the JSON, which lists its modes in `modes`.
-    #[serde(rename = "specimen")]
-    SpecimenTwoModes,
-    /// With a third mode, fitted on a two-mode one.
-    #[serde(rename = "specimen")]
-    SpecimenThreeModes,
+/// One effect the diagnosis fits (spec section 7): a catalogue entry, or the `specimen`
+/// with a second or third mode; its row of [`TABLE`] says how it is fitted. Named in the
+/// JSON by its catalogue entry (a specimen of several modes lists them in `modes`).
+#[derive(Clone, Copy)]
+pub struct Effect(&'static Row);
+
+impl PartialEq for Effect {
+    fn eq(&self, other: &Effect) -> bool {
+        self.name() == other.name() && self.specimen_modes() == other.specimen_modes()
+    }
 }
 
-/// The effects the first search fits: the whole catalogue, in its order. A specimen
-/// candidate is then fitted with one mode more while each helps ([`Effect::next_mode`]).
-pub const EFFECTS: [Effect; 8] = [
-    Effect::Specimen,
-    Effect::Foundation,
-    Effect::StickSlip,
-    Effect::FlowSaturation,
-    Effect::ValveDeadband,
-    Effect::FrictionAsymmetry,
-    Effect::FlowAsymmetry,
-    Effect::FreePlay,
-];
+impl Eq for Effect {}
+
+impl std::fmt::Debug for Effect {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        match self.specimen_modes() {
+            Some(n) if n > 1 => write!(f, "{} ({n} modes)", self.name()),
+            _ => write!(f, "{}", self.name()),
+        }
+    }
+}
+
+impl Serialize for Effect {
+    fn serialize<S: serde::Serializer>(&self, serializer: S) -> Result<S::Ok, S::Error> {
+        serializer.serialize_str(self.name())
+    }
+}
 
 impl Effect {
+    /// The diagnosis' effect of the catalogue entry `entry` (a specimen with its one mode).
+    ///
+    /// # Panics
+    /// When [`TABLE`] has no row for it (a unit test checks that every entry has one).
+    pub fn of(entry: &crate::effects::Effect) -> Effect {
+        TABLE
+            .iter()
+            .find(|r| r.catalogue.name == entry.name && r.specimen_modes.unwrap_or(1) == 1)
+            .map(Effect)
+            .unwrap_or_else(|| panic!("no diagnosis row for `{}`", entry.name))
+    }
+
+    /// The specimen with `modes` modes (1 to 3), `None` beyond.
+    pub fn specimen(modes: usize) -> Option<Effect> {
+        TABLE
+            .iter()
+            .find(|r| r.specimen_modes == Some(modes))
+            .map(Effect)
+    }
+
+    /// The effects the first search fits: the whole catalogue, in its order. A specimen
+    /// candidate is then fitted with one mode more while each helps ([`Effect::next_mode`]).
+    pub fn search_order() -> Vec<Effect> {
+        crate::effects::CATALOGUE.iter().map(Effect::of).collect()
+    }
+
+    /// Whether this is the catalogue entry `entry`'s effect (a specimen of any modes).
+    pub fn is(self, entry: &crate::effects::Effect) -> bool {
+        self.name() == entry.name
+    }
+
     /// The catalogue entry of this effect ([`crate::effects::CATALOGUE`], the one place
     /// its parameters, FMU variables, fitting ranges and signature tests are declared).
     pub fn catalogue(self) -> &'static crate::effects::Effect {
-        use crate::effects::specimen::{THREE_MODES, TWO_MODES};
-        match self {
-            Effect::SpecimenTwoModes => &TWO_MODES,
-            Effect::SpecimenThreeModes => &THREE_MODES,
-            // the catalogue's effects come first, in its order
-            _ => &crate::effects::CATALOGUE[self as usize],
-        }
+        self.0.catalogue
+    }
+
+    /// How the diagnosis fits it ([`TABLE`]).
+    pub(super) fn row(self) -> &'static Row {
+        self.0
     }
 
     /// The specimen with one mode more (a building model's modes show one by one, each
     /// behind the one before), `None` for the other effects and at three modes.
     pub(super) fn next_mode(self) -> Option<Effect> {
-        match self {
-            Effect::Specimen => Some(Effect::SpecimenTwoModes),
-            Effect::SpecimenTwoModes => Some(Effect::SpecimenThreeModes),
-            _ => None,
-        }
+        Effect::specimen(self.specimen_modes()? + 1)
     }
 
-    /// The index among [`Effect::parameters`] of the resonance frequency whose starts lie
-    /// in different valleys of the fit ([`super::starts::keep_each_frequency`]): the
-    /// foundation's, and a specimen's newest mode's (the first mode's starts lie at one
-    /// frequency when read off the apparent mass, on a blind grid without it). `None` for
-    /// the other effects.
-    pub(super) fn valley_frequency(self) -> Option<usize> {
-        let key = match self {
-            Effect::Foundation | Effect::Specimen => "frequency_hz",
-            Effect::SpecimenTwoModes => "mode2.frequency_hz",
-            Effect::SpecimenThreeModes => "mode3.frequency_hz",
-            _ => return None,
-        };
-        self.parameters().iter().position(|k| *k == key)
+    /// The key among [`Effect::parameters`] of the resonance frequency whose starts lie
+    /// in different valleys of the fit ([`Row::valley_frequency`]), `None` for the
+    /// effects without one.
+    pub(super) fn valley_frequency(self) -> Option<&'static str> {
+        self.0.valley_frequency
     }
 
     /// The key among [`Effect::parameters`] of the specimen's newest mode's mass (the mode
@@ -90,23 +105,9 @@ impl Effect {
         }
     }
 
-    /// The value of its parameter `key` in `theta` (its parameters in the order of
-    /// [`Effect::parameters`]), `None` when it has no such parameter.
-    pub(super) fn value_of(self, theta: &[f64], key: &str) -> Option<f64> {
-        self.parameters()
-            .iter()
-            .position(|k| *k == key)
-            .map(|k| theta[k])
-    }
-
     /// The specimen's modes (1 to 3), `None` for the other effects.
     pub fn specimen_modes(self) -> Option<usize> {
-        match self {
-            Effect::Specimen => Some(1),
-            Effect::SpecimenTwoModes => Some(2),
-            Effect::SpecimenThreeModes => Some(3),
-            _ => None,
-        }
+        self.0.specimen_modes
     }
 
     pub fn name(self) -> &'static str {
@@ -162,18 +163,15 @@ impl Effect {
     /// The catalogue effects switched on in `p`, a specimen as the variant of its modes
     /// (a mode exists when its mass is positive, spec section 7).
     pub(super) fn present_in(p: &Params) -> Vec<Effect> {
-        let has = |key: &str| {
-            let e = Effect::SpecimenThreeModes;
-            let k = e.parameters().iter().position(|n| *n == key);
-            k.is_some_and(|k| e.read(p)[k] > 0.0)
-        };
-        EFFECTS
+        let modes = |n: usize| Effect::specimen(n).expect("the specimen's modes");
+        let has = |key: &str| EffectValues::read(modes(3), p).get(key) > 0.0;
+        Effect::search_order()
             .into_iter()
             .filter(|e| e.catalogue().is_enabled(p))
-            .map(|e| match e {
-                Effect::Specimen if has("mode3.mass_kg") => Effect::SpecimenThreeModes,
-                Effect::Specimen if has("mode2.mass_kg") => Effect::SpecimenTwoModes,
-                e => e,
+            .map(|e| match e.specimen_modes() {
+                Some(_) if has("mode3.mass_kg") => modes(3),
+                Some(_) if has("mode2.mass_kg") => modes(2),
+                _ => e,
             })
             .collect()
     }
@@ -183,55 +181,12 @@ impl Effect {
     /// on the predictive score and held in output-error refinements, whose sample-wise
     /// residual is rough at the scale of a percent in its parameters.
     pub(super) fn fitted_on_score(self) -> bool {
-        matches!(self, Effect::StickSlip | Effect::FreePlay)
+        self.0.fit != FitKind::OutputError
     }
 
-    /// The effect's parameters in `p` (the inverse of [`Effect::apply`]).
-    pub(super) fn read(self, p: &Params) -> Vec<f64> {
-        self.catalogue()
-            .parameters
-            .iter()
-            .map(|q| (q.read)(p))
-            .collect()
-    }
-
-    /// Its parameters `theta` by name, the non-finite ones left out (as the JSON lists
-    /// them).
-    pub(super) fn keyed(self, theta: &[f64]) -> std::collections::BTreeMap<String, f64> {
-        self.parameters()
-            .iter()
-            .zip(theta)
-            .filter(|(_, x)| x.is_finite())
-            .map(|(k, x)| (k.to_string(), *x))
-            .collect()
-    }
-
-    /// The one-sigma uncertainties `sigma` of its parameters by name, every one kept: a
-    /// sigma the data cannot bound stays infinite or NaN, which says it is no evidence.
-    pub(super) fn sigma_map(self, sigma: &[f64]) -> std::collections::BTreeMap<String, f64> {
-        self.parameters()
-            .iter()
-            .zip(sigma)
-            .map(|(k, x)| (k.to_string(), *x))
-            .collect()
-    }
-
-    /// Switch the effect on in `p` with its parameters `theta`.
-    pub(super) fn apply(self, p: &mut Params, theta: &[f64]) {
-        let e = self.catalogue();
-        e.set_enabled(p, true);
-        for (q, &x) in e.parameters.iter().zip(theta) {
-            (q.write)(p, x);
-        }
-    }
-
-    /// The fitting bounds for `table`, lower and upper, one per parameter.
-    pub(super) fn bounds(self, table: &Params) -> (Vec<f64>, Vec<f64>) {
-        let ranges = self.catalogue().fit_bounds(table);
-        (
-            ranges.iter().map(|r| r.lower).collect(),
-            ranges.iter().map(|r| r.upper).collect(),
-        )
+    /// The fitting bounds for `table`, by key.
+    pub(super) fn bounds(self, table: &Params) -> EffectBounds {
+        EffectBounds::of(self, table)
     }
 }
 
@@ -264,6 +219,7 @@ pub(super) fn tests_of(c: &Campaign, table: &Params, wanted: &SignatureTests) ->
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::effects::{specimen, valve_deadband};
 
     /// The effects a model holds are read off its parameters, a specimen as its modes: the
     /// polish refits each of them (an accepted cause refitted with the next).
@@ -276,38 +232,44 @@ mod tests {
             .unwrap();
         assert_eq!(
             Effect::present_in(&p),
-            [Effect::Specimen, Effect::ValveDeadband]
+            [
+                Effect::of(&specimen::EFFECT),
+                Effect::of(&valve_deadband::EFFECT)
+            ]
         );
         p.apply_effect_spec("specimen:mode2.mass_kg=2e3,mode2.frequency_hz=9")
             .unwrap();
+        let two_modes = Effect::specimen(2).unwrap();
         assert_eq!(
             Effect::present_in(&p),
-            [Effect::SpecimenTwoModes, Effect::ValveDeadband]
+            [two_modes, Effect::of(&valve_deadband::EFFECT)]
         );
-        let theta = Effect::SpecimenTwoModes.read(&p);
-        let keyed = Effect::SpecimenTwoModes.keyed(&theta);
-        assert_eq!(keyed["mode2.frequency_hz"], 9.0);
-        assert_eq!(keyed.len(), theta.len());
+        let values = EffectValues::read(two_modes, &p);
+        assert_eq!(values.get("mode2.frequency_hz"), 9.0);
+        assert_eq!(values.finite_map().len(), 6);
     }
 
-    /// Each diagnosis effect is the catalogue entry of its name (the enum's order is the
-    /// catalogue's).
+    /// Each diagnosis effect is the catalogue entry of its name, and the search takes the
+    /// catalogue's order.
     #[test]
     fn every_effect_is_its_catalogue_entry() {
-        for e in EFFECTS
-            .into_iter()
-            .chain([Effect::SpecimenTwoModes, Effect::SpecimenThreeModes])
-        {
+        for e in TABLE.iter().map(Effect) {
             // the variant's own name (its JSON form) is its catalogue entry's
             let variant = serde_json::to_string(&e).unwrap();
             assert_eq!(variant, format!("\"{}\"", e.catalogue().name));
             let entry = crate::effects::by_name(e.name()).unwrap();
             let mut p = Params::trees_lab();
-            let theta: Vec<f64> = e.read(&p).iter().map(|x| x * 1.1 + 0.001).collect();
-            e.apply(&mut p, &theta);
+            let mut values = EffectValues::read(e, &p);
+            for (key, x) in EffectValues::read(e, &p).iter() {
+                values.set(key, x * 1.1 + 0.001);
+            }
+            values.apply(&mut p);
             assert!(entry.is_enabled(&p));
-            assert_eq!(e.read(&p), theta);
+            assert_eq!(EffectValues::read(e, &p), values);
         }
+        let names: Vec<&str> = Effect::search_order().iter().map(|e| e.name()).collect();
+        let catalogue: Vec<&str> = crate::effects::CATALOGUE.iter().map(|e| e.name).collect();
+        assert_eq!(names, catalogue);
     }
 
     /// The signature tests are chosen by what they excite: on the paper's program under a
@@ -323,20 +285,19 @@ mod tests {
             t.name = format!("run_{:02}_{}", 17 - k, t.name);
         }
         let paper = |e: Effect| -> &[&str] {
-            match e {
-                Effect::Specimen | Effect::SpecimenTwoModes | Effect::SpecimenThreeModes => {
-                    &["R2", "R3"]
-                }
-                Effect::Foundation => &["R1", "R3", "S9"],
-                Effect::StickSlip => &["S1", "S2", "S4", "S5", "S7", "S8", "T1", "T3"],
-                Effect::FlowSaturation | Effect::FlowAsymmetry => &["R2", "S6", "S9"],
-                Effect::ValveDeadband => &["R2", "S1", "T1", "T3"],
-                Effect::FrictionAsymmetry => &["S1", "S4", "T1", "T3"],
-                Effect::FreePlay => &["R1", "S9"],
+            match e.name() {
+                "specimen" => &["R2", "R3"],
+                "foundation" => &["R1", "R3", "S9"],
+                "stick_slip" => &["S1", "S2", "S4", "S5", "S7", "S8", "T1", "T3"],
+                "flow_saturation" | "flow_asymmetry" => &["R2", "S6", "S9"],
+                "valve_deadband" => &["R2", "S1", "T1", "T3"],
+                "friction_asymmetry" => &["S1", "S4", "T1", "T3"],
+                "free_play" => &["R1", "S9"],
+                other => panic!("no paper tests for {other}"),
             }
         };
         let check = |c: &Campaign| {
-            for e in EFFECTS {
+            for e in Effect::search_order() {
                 let names: Vec<&str> = e
                     .signature_tests(c, &Params::trees_lab())
                     .into_iter()

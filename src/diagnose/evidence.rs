@@ -3,6 +3,7 @@
 //! to physics outside the catalogue is not a cause, however much it helps.
 
 use super::effect::Effect;
+use super::effect_values::EffectBounds;
 use std::collections::BTreeMap;
 
 /// A strength parameter is significant when it lies more than this many sigma from its
@@ -16,20 +17,19 @@ pub const EVIDENCE_SIGMAS: f64 = 2.0;
 const AT_BOUND_FRACTION: f64 = 1e-3;
 
 /// Why the fitted `parameters` (with their one-sigma `sigma`, where the fit gives them;
-/// infinite where the data cannot fix one) of `effect` are not evidence of it, fitted within `lower..upper` (one per parameter
-/// in declaration order), if they are not; `None` when they are.
+/// infinite where the data cannot fix one) of `effect` are not evidence of it, fitted
+/// within `bounds`, if they are not; `None` when they are.
 pub(super) fn not_evidence(
     effect: Effect,
     parameters: &BTreeMap<String, f64>,
     sigma: &BTreeMap<String, f64>,
-    lower: &[f64],
-    upper: &[f64],
+    bounds: &EffectBounds,
 ) -> Option<String> {
-    for ((key, lo), hi) in effect.parameters().iter().zip(lower).zip(upper) {
-        let Some(&x) = parameters.get(*key) else {
+    for (key, lo, hi) in bounds.iter() {
+        let Some(&x) = parameters.get(key) else {
             continue;
         };
-        if let Some(bound) = at_bound(x, *lo, *hi) {
+        if let Some(bound) = at_bound(x, lo, hi) {
             return Some(format!(
                 "{}.{key} = {x:.4e} sits at the {bound} of its fitting range [{lo:.4e}, {hi:.4e}]: the range stopped the fit, not the data",
                 effect.name()
@@ -78,21 +78,46 @@ fn at_bound(x: f64, lo: f64, hi: f64) -> Option<&'static str> {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::diagnose::effect_values::EffectValues;
 
     fn map(pairs: &[(&str, f64)]) -> BTreeMap<String, f64> {
         pairs.iter().map(|(k, v)| (k.to_string(), *v)).collect()
     }
 
+    /// The fitting range of `effect` from `(key, lower, upper)`.
+    fn range(effect: Effect, ranges: &[(&str, f64, f64)]) -> EffectBounds {
+        let side = |pick: fn(&(&str, f64, f64)) -> f64| {
+            let pairs: Vec<(&str, f64)> = ranges.iter().map(|r| (r.0, pick(r))).collect();
+            EffectValues::new(effect, &pairs)
+        };
+        EffectBounds {
+            lower: side(|r| r.1),
+            upper: side(|r| r.2),
+        }
+    }
+
     #[test]
     fn a_parameter_at_a_bound_is_not_evidence() {
-        let lo = [200.0, 0.5, 0.002];
-        let hi = [2e5, 60.0, 0.5];
+        let b = range(
+            Effect::of(&crate::effects::specimen::EFFECT),
+            &[
+                ("mass_kg", 200.0, 2e5),
+                ("frequency_hz", 0.5, 60.0),
+                ("damping_ratio", 0.002, 0.5),
+            ],
+        );
         let fitted = map(&[
             ("mass_kg", 8e3),
             ("frequency_hz", 6.0),
             ("damping_ratio", 0.002),
         ]);
-        let why = not_evidence(Effect::Specimen, &fitted, &map(&[]), &lo, &hi).unwrap();
+        let why = not_evidence(
+            Effect::of(&crate::effects::specimen::EFFECT),
+            &fitted,
+            &map(&[]),
+            &b,
+        )
+        .unwrap();
         assert!(
             why.contains("damping_ratio") && why.contains("lower bound"),
             "{why}"
@@ -103,7 +128,12 @@ mod tests {
             ("damping_ratio", 0.03),
         ]);
         assert_eq!(
-            not_evidence(Effect::Specimen, &inside, &map(&[]), &lo, &hi),
+            not_evidence(
+                Effect::of(&crate::effects::specimen::EFFECT),
+                &inside,
+                &map(&[]),
+                &b
+            ),
             None
         );
     }
@@ -113,55 +143,77 @@ mod tests {
     /// static ratio of 8.5 on a range up to 6) is not evidence either.
     #[test]
     fn a_parameter_beyond_a_bound_is_not_evidence() {
-        let (lo, hi) = ([1.0, 1e-4], [6.0, 0.05]);
+        let b = range(
+            Effect::of(&crate::effects::stick_slip::EFFECT),
+            &[
+                ("static_ratio", 1.0, 6.0),
+                ("stribeck_velocity_m_s", 1e-4, 0.05),
+            ],
+        );
         let beyond = map(&[("static_ratio", 8.5), ("stribeck_velocity_m_s", 0.01)]);
-        let why = not_evidence(Effect::StickSlip, &beyond, &map(&[]), &lo, &hi).unwrap();
+        let why = not_evidence(
+            Effect::of(&crate::effects::stick_slip::EFFECT),
+            &beyond,
+            &map(&[]),
+            &b,
+        )
+        .unwrap();
         assert!(
             why.contains("static_ratio") && why.contains("upper bound"),
             "{why}"
         );
         let inside = map(&[("static_ratio", 2.0), ("stribeck_velocity_m_s", 0.01)]);
         assert_eq!(
-            not_evidence(Effect::StickSlip, &inside, &map(&[]), &lo, &hi),
+            not_evidence(
+                Effect::of(&crate::effects::stick_slip::EFFECT),
+                &inside,
+                &map(&[]),
+                &b
+            ),
             None
         );
     }
 
     #[test]
     fn a_strength_within_two_sigma_of_no_effect_is_not_evidence() {
-        let (lo, hi) = ([0.0], [0.2]);
+        let b = range(
+            Effect::of(&crate::effects::valve_deadband::EFFECT),
+            &[("deadband", 0.0, 0.2)],
+        );
         let weak = map(&[("deadband", 1e-3)]);
         let why = not_evidence(
-            Effect::ValveDeadband,
+            Effect::of(&crate::effects::valve_deadband::EFFECT),
             &weak,
             &map(&[("deadband", 1e-3)]),
-            &lo,
-            &hi,
+            &b,
         );
         assert!(why.unwrap().contains("vanishes"));
         let strong = map(&[("deadband", 1e-2)]);
         assert_eq!(
             not_evidence(
-                Effect::ValveDeadband,
+                Effect::of(&crate::effects::valve_deadband::EFFECT),
                 &strong,
                 &map(&[("deadband", 1e-3)]),
-                &lo,
-                &hi
+                &b
             ),
             None
         );
         // no sigma (a fit that gives none, as stick-slip's): only the bounds judge
         assert_eq!(
-            not_evidence(Effect::ValveDeadband, &weak, &map(&[]), &lo, &hi),
+            not_evidence(
+                Effect::of(&crate::effects::valve_deadband::EFFECT),
+                &weak,
+                &map(&[]),
+                &b
+            ),
             None
         );
         // a parameter the data cannot fix (infinite sigma) is no evidence
         let why = not_evidence(
-            Effect::ValveDeadband,
+            Effect::of(&crate::effects::valve_deadband::EFFECT),
             &strong,
             &map(&[("deadband", f64::INFINITY)]),
-            &lo,
-            &hi,
+            &b,
         );
         assert!(why.unwrap().contains("null direction"));
     }

@@ -4,8 +4,9 @@
 use super::baseline::{
     candidate_range, mass_is_scale, refine_output_error, BaselineParameter, Range,
 };
-use super::candidates::FitContext;
+use super::candidates::{FitContext, ScoreFit};
 use super::effect::Effect;
+use super::effect_values::{EffectBounds, EffectValues};
 use super::part::Part;
 use super::residuals;
 use super::stick_slip::{UNBENDING_ITERATIONS, UNBENDING_ROUNDS};
@@ -53,15 +54,17 @@ const RESTARTS: usize = 3;
 const IMPROVEMENT: f64 = 0.8;
 
 /// The point the polish moves: the gap and the rod's mass (the effect's fitted
-/// parameters, in the catalogue's order), then [`POLISHED`] in its order (the oil column
-/// first). This is the one place that knows the layout.
+/// parameters, in the catalogue's order: [`EffectValues::layout`]), then [`POLISHED`] in
+/// its order (the oil column first). This is the one place that knows the layout.
 const EFFECT_LEN: usize = 2;
+/// The gap's place in the point (the catalogue declares it first).
+const GAP_AT: usize = 0;
 
 /// Free play on the predictive score (see [`residuals`]): the table bounces inside the
 /// gap after each crossing, chaotically, so the sample-wise residual is rough at the
 /// scale of a percent in any parameter (finite differences stall), while the score's
-/// window powers follow the gap smoothly. From `start` (`[gap_m, rod_mass_kg]`, read off
-/// the data), the best base among `bases` with its oil column stiffened by
+/// window powers follow the gap smoothly. From `start` (the gap and the rod's mass read
+/// off the data), the best base among `bases` with its oil column stiffened by
 /// [`OIL_COLUMN_FACTORS`] starts a Nelder-Mead polish of the gap (held within
 /// [`GAP_READ_SPAN`] of the reading), the rod's mass and [`POLISHED`] on the signature
 /// tests' fitting halves; then, as stick-slip's fit does,
@@ -71,11 +74,11 @@ const EFFECT_LEN: usize = 2;
 pub(super) fn fit_free_play(
     bases: &[Params],
     sig: &[usize],
-    start: &[f64],
+    start: &EffectValues,
     ctx: &FitContext,
-) -> Option<(f64, Vec<f64>, Params)> {
+) -> Option<ScoreFit> {
     let fit = PlayFit::new(bases, sig, start, ctx);
-    fit.trace(&format!("start: {start:?}"));
+    fit.trace(&format!("start: {:?}", start.layout()));
     let (x0, base, first) = fit.best_start(bases, start)?;
     let mut best = fit.polish(&base, (first, x0));
     let mut base = base;
@@ -93,12 +96,23 @@ pub(super) fn fit_free_play(
         }
         (best, base) = (next, unbent);
     }
-    let p = fit.model(&base, &best.1);
-    Some((best.0, best.1[..EFFECT_LEN].to_vec(), p))
+    Some(ScoreFit {
+        score: best.0,
+        values: effect_of(&best.1),
+        params: fit.model(&base, &best.1),
+    })
 }
 
 /// A score and the point it was taken at.
 type Scored = (f64, Vec<f64>);
+
+/// The effect's values in the point `x`.
+fn effect_of(x: &[f64]) -> EffectValues {
+    EffectValues::from_layout(
+        Effect::of(&crate::effects::free_play::EFFECT),
+        &x[..EFFECT_LEN],
+    )
+}
 
 /// What the free play's polish works on: the campaign, the signature tests, the bounds
 /// of the effect and of [`POLISHED`], and what is held (the gap near its reading, a table
@@ -106,18 +120,23 @@ type Scored = (f64, Vec<f64>);
 struct PlayFit<'a> {
     ctx: &'a FitContext<'a>,
     sig: &'a [usize],
-    lower: Vec<f64>,
-    upper: Vec<f64>,
+    bounds: EffectBounds,
     ranges: Vec<Range>,
     gap_span: [f64; 2],
     mass_held: Option<(usize, f64)>,
 }
 
 impl<'a> PlayFit<'a> {
-    fn new(bases: &[Params], sig: &'a [usize], start: &[f64], ctx: &'a FitContext<'a>) -> Self {
-        let (lower, upper) = Effect::FreePlay.bounds(&bases[0]);
+    fn new(
+        bases: &[Params],
+        sig: &'a [usize],
+        start: &EffectValues,
+        ctx: &'a FitContext<'a>,
+    ) -> Self {
+        let bounds = Effect::of(&crate::effects::free_play::EFFECT).bounds(&bases[0]);
         // the gap held within the reading's span: beyond it the nearest gap in the span
-        let gap_span = [start[0] / GAP_READ_SPAN, start[0] * GAP_READ_SPAN];
+        let gap = start.get("gap_m");
+        let gap_span = [gap / GAP_READ_SPAN, gap * GAP_READ_SPAN];
         // a table mass that is only a scale stays where the baseline holds it
         let mass_held = POLISHED
             .iter()
@@ -138,8 +157,7 @@ impl<'a> PlayFit<'a> {
         PlayFit {
             ctx,
             sig,
-            lower,
-            upper,
+            bounds,
             ranges,
             gap_span,
             mass_held,
@@ -155,7 +173,7 @@ impl<'a> PlayFit<'a> {
     /// `x` with the gap in its span and a held table mass at its value.
     fn held(&self, x: &[f64]) -> Vec<f64> {
         let mut y = x.to_vec();
-        y[0] = y[0].clamp(self.gap_span[0], self.gap_span[1]);
+        y[GAP_AT] = y[GAP_AT].clamp(self.gap_span[0], self.gap_span[1]);
         if let Some((at, m)) = self.mass_held {
             y[at] = m;
         }
@@ -165,7 +183,7 @@ impl<'a> PlayFit<'a> {
     /// `base` with the play and [`POLISHED`] set from `x`.
     fn model(&self, base: &Params, x: &[f64]) -> Params {
         let mut p = *base;
-        Effect::FreePlay.apply(&mut p, &x[..EFFECT_LEN]);
+        effect_of(x).apply(&mut p);
         for (w, v) in POLISHED.iter().zip(&x[EFFECT_LEN..]) {
             w.set(&mut p, *v);
         }
@@ -173,7 +191,8 @@ impl<'a> PlayFit<'a> {
     }
 
     fn inside(&self, x: &[f64]) -> bool {
-        (0..EFFECT_LEN).all(|k| (self.lower[k]..=self.upper[k]).contains(&x[k]))
+        let (lower, upper) = (self.bounds.lower.layout(), self.bounds.upper.layout());
+        (0..EFFECT_LEN).all(|k| (lower[k]..=upper[k]).contains(&x[k]))
             && self
                 .ranges
                 .iter()
@@ -199,12 +218,16 @@ impl<'a> PlayFit<'a> {
 
     /// The best base with its oil column stiffened by [`OIL_COLUMN_FACTORS`]: its point,
     /// the base and the score; `None` when no start scores finite.
-    fn best_start(&self, bases: &[Params], start: &[f64]) -> Option<(Vec<f64>, Params, f64)> {
+    fn best_start(
+        &self,
+        bases: &[Params],
+        start: &EffectValues,
+    ) -> Option<(Vec<f64>, Params, f64)> {
         let (x0, base, first) = bases
             .iter()
             .flat_map(|b| OIL_COLUMN_FACTORS.iter().map(move |&f| (b, f)))
             .map(|(b, f)| {
-                let mut x: Vec<f64> = start.to_vec();
+                let mut x: Vec<f64> = start.layout().to_vec();
                 x.extend(POLISHED.iter().map(|w| w.get(b)));
                 x[EFFECT_LEN] = (x[EFFECT_LEN] * f).min(self.ranges[0].upper);
                 let s = self.score(b, &x);
@@ -236,11 +259,10 @@ impl<'a> PlayFit<'a> {
         best: &Scored,
         first_base: &Params,
     ) -> Option<(Scored, Params)> {
-        let e = Effect::FreePlay;
         let unbent = refine_output_error(
             self.ctx.c,
             &self.model(base, &best.1),
-            &[(e, &best.1[..EFFECT_LEN])],
+            &[effect_of(&best.1)],
             first_base,
             self.ctx.fit_idx,
             self.ctx.whitening,
@@ -286,4 +308,17 @@ fn nelder_mead(score: &dyn Fn(&[f64]) -> f64, x0: &[f64], first: f64) -> Option<
         .state;
     let y = state.best_param?;
     Some((y.iter().map(|v| v.exp()).collect(), state.best_cost))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// The point's layout is the catalogue's: the gap first, then the rod's mass.
+    #[test]
+    fn the_point_leads_with_the_effects_values() {
+        let keys = Effect::of(&crate::effects::free_play::EFFECT).parameters();
+        assert_eq!(keys.len(), EFFECT_LEN);
+        assert_eq!(keys[GAP_AT], "gap_m");
+    }
 }

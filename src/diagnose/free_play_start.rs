@@ -6,7 +6,8 @@
 //! integrated acceleration, levelled on the contact before the reversal, rises in the
 //! direction of the new motion to about the gap.
 
-use super::effect::tests_of;
+use super::effect::{tests_of, Effect};
+use super::effect_values::EffectValues;
 use super::residuals::median;
 use crate::campaign::{line_fit, Campaign};
 use crate::effects::SignatureTests;
@@ -54,10 +55,14 @@ const NULL_FACTOR: f64 = 2.0;
 /// worn clevis shows (0.2 mm, `free_play`'s default).
 const MIN_GAP_M: f64 = 5e-5;
 
-/// The start `[gap_m, rod_mass_kg]` of the free-play fit read off the reversals of the
+/// The start (`gap_m`, `rod_mass_kg`) of the free-play fit read off the reversals of the
 /// [`READ_AT`] tests, or None when they show no rise above the mid-stroke drift and
 /// [`MIN_GAP_M`] or lack the displacement and acceleration channels.
-pub(super) fn free_play_start(c: &Campaign, base: &Params, rod_mass_kg: f64) -> Option<Vec<f64>> {
+pub(super) fn free_play_start(
+    c: &Campaign,
+    base: &Params,
+    rod_mass_kg: f64,
+) -> Option<EffectValues> {
     let (mut at_reversals, mut mid_stroke) = (Vec::new(), Vec::new());
     for i in tests_of(c, base, &READ_AT) {
         let r = &c.records[i];
@@ -89,7 +94,12 @@ pub(super) fn free_play_start(c: &Campaign, base: &Params, rod_mass_kg: f64) -> 
         );
     }
     let seen = gap > MIN_GAP_M && (drift.is_nan() || gap > NULL_FACTOR * drift);
-    seen.then(|| vec![gap, rod_mass_kg])
+    seen.then(|| {
+        EffectValues::new(
+            Effect::of(&crate::effects::free_play::EFFECT),
+            &[("gap_m", gap), ("rod_mass_kg", rod_mass_kg)],
+        )
+    })
 }
 
 /// The reference's reversals: the first sample of each new direction and that direction
@@ -180,9 +190,9 @@ mod tests {
                 let c = campaign(Some(gap), seed);
                 let s = free_play_start(&c, &Params::trees_lab(), 1500.0).expect("a start");
                 assert!(
-                    (s[0] / gap - 1.0).abs() < 0.15,
+                    (s.get("gap_m") / gap - 1.0).abs() < 0.15,
                     "seed {seed}: {} for {gap}",
-                    s[0]
+                    s.get("gap_m")
                 );
             }
             let c = campaign(None, seed);

@@ -48,6 +48,8 @@ mod candidate_fit;
 mod candidates;
 mod direction_starts;
 mod effect;
+mod effect_table;
+mod effect_values;
 mod effort;
 mod evidence;
 mod fits;
@@ -67,7 +69,7 @@ mod stick_slip;
 pub mod stribeck;
 mod visibility;
 
-pub use effect::{Effect, EFFECTS};
+pub use effect::Effect;
 pub use effort::Effort;
 pub use fits::{medians_by_channel, ChannelMedian, ModelFit};
 pub use locate::{Dependence, Split};
@@ -177,7 +179,7 @@ mod tests {
     use super::*;
 
     fn candidate(mass_kg: f64, frequency_hz: f64) -> Candidate {
-        let mut c = Candidate::empty(Effect::Foundation);
+        let mut c = Candidate::empty(Effect::of(&crate::effects::foundation::EFFECT));
         c.parameters = [
             ("mass_kg".to_string(), mass_kg),
             ("frequency_hz".to_string(), frequency_hz),

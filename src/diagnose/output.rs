@@ -2,6 +2,7 @@
 
 use super::candidates::PENALTY_PER_PARAMETER;
 use super::effect::Effect;
+use super::effect_values::EffectValues;
 use super::effort::Effort;
 use super::evidence::EVIDENCE_SIGMAS;
 use super::pipeline::{COHERENT_MAJORITY, MIN_COHERENT_REMOVED, UNRESOLVED_CHANGE};
@@ -63,9 +64,9 @@ pub struct Candidate {
     #[serde(skip)]
     pub fewer_modes: Option<Box<Candidate>>,
     /// The one-sigma uncertainties of the causes accepted before, refitted with this one
-    /// by its polish, each in its effect's parameter order (empty without a polish).
+    /// by its polish (empty without a polish).
     #[serde(skip)]
-    pub refitted_sigma: Vec<(Effect, Vec<f64>)>,
+    pub refitted_sigma: Vec<EffectValues>,
 }
 
 impl Candidate {

@@ -9,7 +9,7 @@
 
 use super::baseline::{from_motion, refine_output_error};
 use super::candidates::{fit_candidate, FitContext, Hold};
-use super::effect::{Effect, EFFECTS};
+use super::effect::Effect;
 use super::effort::Effort;
 use super::missed::Missed;
 use super::output::{Candidate, PartRows};
@@ -24,7 +24,7 @@ use rayon::prelude::*;
 const PROGRESS_SETUP: usize = 2;
 
 /// Steps of one search: every catalogue effect's fit, then the best one's polish.
-const SEARCH_STEPS: usize = EFFECTS.len() + 1;
+const SEARCH_STEPS: usize = crate::effects::CATALOGUE.len() + 1;
 
 /// Causes accepted at most: each further search fits every remaining effect again (about
 /// a minute on 2 cores for the paper campaign), and three effects at once are beyond
@@ -157,10 +157,13 @@ impl Diagnoser<'_> {
         effects
             .par_iter()
             .filter_map(|&e| {
-                let cand = self.fitted(e, &bases, missed, hold).map(|cand| match e {
-                    // its further modes beside the other effects' fits
-                    Effect::Specimen => self.with_further_modes(&cand, &bases[1], missed, hold),
-                    _ => cand,
+                let cand = self.fitted(e, &bases, missed, hold).map(|cand| {
+                    // a specimen's further modes beside the other effects' fits
+                    if e.next_mode().is_some() {
+                        self.with_further_modes(&cand, &bases[1], missed, hold)
+                    } else {
+                        cand
+                    }
                 });
                 let n = done.fetch_add(1, std::sync::atomic::Ordering::Relaxed);
                 self.tick(n + 1, total, &format!("fitted {}", e.name()));
@@ -209,7 +212,7 @@ impl Diagnoser<'_> {
         hold: &Hold,
     ) -> Candidate {
         let mut cand = specimen.clone();
-        let mut mode = Effect::Specimen.next_mode();
+        let mut mode = specimen.effect.next_mode();
         while let Some(e) = mode {
             let mut under = *section4;
             under.specimen = cand.params.specimen;

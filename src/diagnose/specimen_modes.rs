@@ -3,6 +3,7 @@
 //! building model's numbering), and written as the parameter file writes them.
 
 use super::effect::Effect;
+use super::effect_values::EffectValues;
 use super::output::Candidate;
 use crate::effects::specimen::SpecimenMode;
 use std::collections::BTreeMap;
@@ -32,6 +33,23 @@ pub(super) fn modes_apart(p: &crate::params::Params) -> bool {
 
 /// The three fields of a mode, in [`SpecimenMode`]'s order.
 const FIELDS: [&str; 3] = ["mass_kg", "frequency_hz", "damping_ratio"];
+
+/// The values of the specimen `effect` whose modes are `modes` (mode 1 first, one per
+/// mode of the effect).
+pub(super) fn specimen_values(effect: Effect, modes: &[SpecimenMode]) -> EffectValues {
+    let pairs: Vec<(String, f64)> = PREFIXES
+        .iter()
+        .zip(modes)
+        .flat_map(|(prefix, m)| {
+            FIELDS
+                .iter()
+                .zip([m.mass_kg, m.frequency_hz, m.damping_ratio])
+                .map(move |(field, v)| (format!("{prefix}{field}"), v))
+        })
+        .collect();
+    let pairs: Vec<(&str, f64)> = pairs.iter().map(|(k, v)| (k.as_str(), *v)).collect();
+    EffectValues::new(effect, &pairs)
+}
 
 /// The modes of `c` (a specimen candidate) in ascending frequency: its model's specimen
 /// and its parameters' and sigmas' keys renumbered alike.
@@ -121,7 +139,7 @@ mod tests {
     #[test]
     fn a_lower_mode_found_second_becomes_mode_one() {
         let mut c = candidate(
-            Effect::SpecimenTwoModes,
+            Effect::specimen(2).unwrap(),
             &[
                 ("mass_kg", 6e3),
                 ("frequency_hz", 13.5),
@@ -160,7 +178,7 @@ mod tests {
     #[test]
     fn one_mode_keeps_its_flat_parameters() {
         let one = candidate(
-            Effect::Specimen,
+            Effect::of(&crate::effects::specimen::EFFECT),
             &[
                 ("mass_kg", 6e3),
                 ("frequency_hz", 13.5),

@@ -1,11 +1,12 @@
 //! Physically informed starts of the candidates' fits: the apparent mass of the random
 //! tests (specimen, foundation), the velocity plateau (flow saturation), small grids.
 
-use super::direction_starts::{flow_ratio_start, friction_ratio_start};
 use super::effect::Effect;
-use super::free_play_start::free_play_start;
-use super::specimen_modes::apart;
+use super::effect_table::StartsFrom;
+use super::effect_values::EffectValues;
+use super::specimen_modes::{apart, specimen_values};
 use crate::campaign::{Campaign, TestKind};
+use crate::effects::specimen::SpecimenMode;
 use crate::identify::frf::{Welch, WelchOptions};
 use crate::identify::select::random_roles;
 use crate::params::Params;
@@ -14,7 +15,7 @@ use std::f64::consts::PI;
 
 /// The rod's start as a share of the moving mass: the catalogue's 1.5 t rod and piston of
 /// the 41 t TREES Lab table (`free_play`'s default), scaled to the table.
-const ROD_MASS_FRACTION: f64 = 0.036;
+pub(super) const ROD_MASS_FRACTION: f64 = 0.036;
 
 /// Start grids of the candidates' fits, in the table's terms where the effect scales with
 /// it. They only seed the fits (the caller screens every start and fits the best two), so
@@ -83,42 +84,74 @@ pub(super) fn apparent_mass(c: &Campaign) -> Option<(Vec<f64>, Vec<Complex64>)> 
     ))
 }
 
-/// Starting points of a candidate's effect parameters (physically informed).
+/// Starting points of a candidate's effect parameters (physically informed): its row's
+/// ([`super::effect_table::Row::starts`]).
 pub(super) fn starts(
     effect: Effect,
     c: &Campaign,
     base: &Params,
-    informed: Option<&[f64]>,
-) -> Vec<Vec<f64>> {
-    let m = base.table.mass_kg;
-    match effect {
-        Effect::Specimen => specimen_starts(c, m),
-        Effect::Foundation => foundation_starts(m, informed),
-        Effect::StickSlip => {
-            let mut g = Vec::new();
-            for r in grid::STICK_SLIP_RATIOS {
-                for v in grid::STRIBECK_VELOCITIES_M_S {
-                    g.push(vec![r, v]);
-                }
-            }
-            g
+    informed: Option<&EffectValues>,
+) -> Vec<EffectValues> {
+    (effect.row().starts)(&StartsFrom {
+        effect,
+        c,
+        base,
+        informed,
+    })
+}
+
+/// The values of an effect of one parameter (a deadband, a ratio, a flow limit).
+pub(super) fn one_value(effect: Effect, value: f64) -> EffectValues {
+    let keys = effect.parameters();
+    EffectValues::new(effect, &[(keys[0], value)])
+}
+
+/// A deadband's grid ([`grid::DEADBANDS`]).
+pub(super) fn deadband_grid(effect: Effect) -> Vec<EffectValues> {
+    grid::DEADBANDS
+        .iter()
+        .map(|&d| one_value(effect, d))
+        .collect()
+}
+
+/// An asymmetry's grid either side of symmetry ([`grid::ASYMMETRY_RATIOS`]).
+pub(super) fn asymmetry_grid(effect: Effect) -> Vec<EffectValues> {
+    grid::ASYMMETRY_RATIOS
+        .iter()
+        .map(|&r| one_value(effect, r))
+        .collect()
+}
+
+/// A resonance's values (the specimen's first mode, the foundation).
+fn resonance(effect: Effect, mass_kg: f64, frequency_hz: f64, damping_ratio: f64) -> EffectValues {
+    EffectValues::new(
+        effect,
+        &[
+            ("mass_kg", mass_kg),
+            ("frequency_hz", frequency_hz),
+            ("damping_ratio", damping_ratio),
+        ],
+    )
+}
+
+/// Stick-slip's grid: every static ratio at every Stribeck velocity.
+pub(super) fn stick_slip_grid() -> Vec<EffectValues> {
+    let mut g = Vec::new();
+    for r in grid::STICK_SLIP_RATIOS {
+        for v in grid::STRIBECK_VELOCITIES_M_S {
+            g.push(EffectValues::new(
+                Effect::of(&crate::effects::stick_slip::EFFECT),
+                &[("static_ratio", r), ("stribeck_velocity_m_s", v)],
+            ));
         }
-        Effect::FlowSaturation => vec![vec![flow_limit_start(c, base)]],
-        Effect::ValveDeadband => grid::DEADBANDS.iter().map(|&d| vec![d]).collect(),
-        // a grid either side of symmetry; the direction split adds its own start
-        Effect::FrictionAsymmetry | Effect::FlowAsymmetry => {
-            grid::ASYMMETRY_RATIOS.iter().map(|&r| vec![r]).collect()
-        }
-        // fitted from the gap read off the data alone ([`super::free_play_fit`])
-        Effect::FreePlay => Vec::new(),
-        Effect::SpecimenTwoModes | Effect::SpecimenThreeModes => higher_mode_starts(c, base),
     }
+    g
 }
 
 /// A specimen's starts on a table of `table_mass_kg`: its resonance at the largest
 /// deviation of `F/a` from a rigid mass, at [`grid::SPECIMEN_MASS_RATIOS`]; the blind grid
 /// without the apparent mass.
-fn specimen_starts(c: &Campaign, table_mass_kg: f64) -> Vec<Vec<f64>> {
+pub(super) fn specimen_starts(c: &Campaign, table_mass_kg: f64) -> Vec<EffectValues> {
     let m = table_mass_kg;
     let Some((f, h)) = apparent_mass(c) else {
         return specimen_blind_grid(m);
@@ -129,7 +162,14 @@ fn specimen_starts(c: &Campaign, table_mass_kg: f64) -> Vec<Vec<f64>> {
     let fs = f[k];
     grid::SPECIMEN_MASS_RATIOS
         .iter()
-        .map(|r| vec![r * m, fs, grid::SPECIMEN_DAMPING])
+        .map(|r| {
+            resonance(
+                Effect::of(&crate::effects::specimen::EFFECT),
+                r * m,
+                fs,
+                grid::SPECIMEN_DAMPING,
+            )
+        })
         .collect()
 }
 
@@ -137,15 +177,25 @@ fn specimen_starts(c: &Campaign, table_mass_kg: f64) -> Vec<Vec<f64>> {
 /// [`foundation_start`]) and a spread over the plausible band, screened by the caller.
 /// The FRF fit places the mode to a few percent; its mass and damping trade off on a
 /// smeared peak, so the mass is spread.
-fn foundation_starts(table_mass_kg: f64, informed: Option<&[f64]>) -> Vec<Vec<f64>> {
+pub(super) fn foundation_starts(
+    table_mass_kg: f64,
+    informed: Option<&EffectValues>,
+) -> Vec<EffectValues> {
     let m = table_mass_kg;
-    let mut g: Vec<Vec<f64>> = Vec::new();
+    let e = Effect::of(&crate::effects::foundation::EFFECT);
+    let mut g: Vec<EffectValues> = Vec::new();
     if let Some(f) = informed {
         for r in grid::FOUNDATION_INFORMED_MASS_RATIOS {
-            g.push(vec![r * m, f[1], grid::FOUNDATION_DAMPING]);
+            g.push(resonance(
+                e,
+                r * m,
+                f.get("frequency_hz"),
+                grid::FOUNDATION_DAMPING,
+            ));
         }
     }
     g.extend(resonance_grid(
+        e,
         m,
         &grid::FOUNDATION_FREQUENCIES_HZ,
         &grid::FOUNDATION_MASS_RATIOS,
@@ -156,7 +206,7 @@ fn foundation_starts(table_mass_kg: f64, informed: Option<&[f64]>) -> Vec<Vec<f6
 
 /// The flow limit's start, m^3/s: the velocity plateau of the fastest sines times the
 /// piston area (at least [`grid::MIN_FLOW_START_M3_S`]).
-fn flow_limit_start(c: &Campaign, base: &Params) -> f64 {
+pub(super) fn flow_limit_start(c: &Campaign, base: &Params) -> f64 {
     let mut vmax: f64 = 0.0;
     for (spec, r) in c.info.tests.iter().zip(&c.records) {
         if let (TestKind::Sine, Some(x)) = (spec.kind, r.displacement_m.as_deref()) {
@@ -181,14 +231,16 @@ fn flow_limit_start(c: &Campaign, base: &Params) -> f64 {
 /// modes afresh at the highest measured peaks. Without an apparent mass (no force, or no
 /// random test with force and acceleration to read it from), the new mode at each
 /// frequency of the first mode's blind grid away from the modes so far.
-fn higher_mode_starts(c: &Campaign, base: &Params) -> Vec<Vec<f64>> {
+pub(super) fn higher_mode_starts(effect: Effect, c: &Campaign, base: &Params) -> Vec<EffectValues> {
     let s = &base.specimen;
     let modes = s.modes();
     let table = base.table.mass_kg;
     let fitted_hz: Vec<f64> = modes.iter().map(|m| m.frequency_hz).collect();
-    let fitted = modes
-        .iter()
-        .flat_map(|m| [m.mass_kg, m.frequency_hz, m.damping_ratio]);
+    // the modes so far, then `new`
+    let with = |new: SpecimenMode| -> EffectValues {
+        let all: Vec<SpecimenMode> = modes.iter().copied().chain([new]).collect();
+        specimen_values(effect, &all)
+    };
     let Some((f, h)) = apparent_mass(c) else {
         // without the apparent mass the mode-1 blind grid away from the modes so far: the motion's
         // own departure from them peaks at the oil column, where any bias shows, not at a
@@ -196,8 +248,8 @@ fn higher_mode_starts(c: &Campaign, base: &Params) -> Vec<Vec<f64>> {
         // bin, the oil column by 6 %)
         return specimen_blind_grid(table)
             .into_iter()
-            .filter(|new| apart(new[1], &fitted_hz))
-            .map(|new| fitted.clone().chain(new).collect())
+            .filter(|new| apart(new.get("frequency_hz"), &fitted_hz))
+            .map(|new| with(mode_of(&new)))
             .collect();
     };
     let modelled = |f_hz: f64| {
@@ -220,12 +272,16 @@ fn higher_mode_starts(c: &Campaign, base: &Params) -> Vec<Vec<f64>> {
     // absorb the next one (a one-mode fit drawn between two peaks)
     let mut highest = highest_peaks(&f, &height, &[], modes.len() + 1);
     highest.sort_unstable();
-    let afresh: Vec<f64> = highest
+    let afresh: Vec<SpecimenMode> = highest
         .iter()
-        .flat_map(|&k| [2.0 * z * height[k], f[k], z])
+        .map(|&k| SpecimenMode {
+            mass_kg: 2.0 * z * height[k],
+            frequency_hz: f[k],
+            damping_ratio: z,
+        })
         .collect();
     (highest.len() == modes.len() + 1)
-        .then_some(afresh)
+        .then(|| specimen_values(effect, &afresh))
         .into_iter()
         .chain(
             peaks
@@ -236,15 +292,22 @@ fn higher_mode_starts(c: &Campaign, base: &Params) -> Vec<Vec<f64>> {
                         .chain(grid::SPECIMEN_MASS_RATIOS.iter().map(|r| r * table))
                         .map(move |m| (m, fk))
                 })
-                .map(|(m, fk)| fitted.clone().chain([m, fk, z]).collect()),
+                .map(|(m, fk)| {
+                    with(SpecimenMode {
+                        mass_kg: m,
+                        frequency_hz: fk,
+                        damping_ratio: z,
+                    })
+                }),
         )
         .collect()
 }
 
 /// The specimen's blind grid ([`grid::SPECIMEN_BLIND_FREQUENCIES_HZ`]) on a table of
 /// `table_mass_kg`.
-fn specimen_blind_grid(table_mass_kg: f64) -> Vec<Vec<f64>> {
+fn specimen_blind_grid(table_mass_kg: f64) -> Vec<EffectValues> {
     resonance_grid(
+        Effect::of(&crate::effects::specimen::EFFECT),
         table_mass_kg,
         &grid::SPECIMEN_BLIND_FREQUENCIES_HZ,
         &grid::SPECIMEN_BLIND_MASS_RATIOS,
@@ -252,22 +315,33 @@ fn specimen_blind_grid(table_mass_kg: f64) -> Vec<Vec<f64>> {
     )
 }
 
-/// A blind grid of a resonance's starts `[mass_kg, frequency_hz, damping_ratio]`: every
-/// frequency at every mass (table masses of `table_mass_kg`), frequency by frequency.
+/// A blind grid of a resonance's starts (`effect`'s mass, frequency and damping ratio):
+/// every frequency at every mass (table masses of `table_mass_kg`), frequency by
+/// frequency.
 fn resonance_grid(
+    effect: Effect,
     table_mass_kg: f64,
     frequencies_hz: &[f64],
     mass_ratios: &[f64],
     damping_ratio: f64,
-) -> Vec<Vec<f64>> {
+) -> Vec<EffectValues> {
     frequencies_hz
         .iter()
         .flat_map(|&f| {
             mass_ratios
                 .iter()
-                .map(move |r| vec![r * table_mass_kg, f, damping_ratio])
+                .map(move |r| resonance(effect, r * table_mass_kg, f, damping_ratio))
         })
         .collect()
+}
+
+/// The first mode of the specimen values `v`.
+fn mode_of(v: &EffectValues) -> SpecimenMode {
+    SpecimenMode {
+        mass_kg: v.get("mass_kg"),
+        frequency_hz: v.get("frequency_hz"),
+        damping_ratio: v.get("damping_ratio"),
+    }
 }
 
 /// The `keep` best of a resonance's screened starts (`scored`, best first), plus the best
@@ -321,16 +395,18 @@ fn highest_peaks(f: &[f64], height: &[f64], taken_hz: &[f64], n: usize) -> Vec<u
 /// alone can bend so that the departure peaks beside it, not at the next mode).
 const FURTHER_MODE_FREQUENCIES: usize = 3;
 
-/// The start of `effect` read off the data (the foundation's and the free play's from the
-/// LVDT/accelerometer discrepancy), fitted by [`fit_candidate`] whatever the screening says.
-pub(super) fn informed_start(effect: Effect, c: &Campaign, base: &Params) -> Option<Vec<f64>> {
-    match effect {
-        Effect::Foundation => foundation_start(c, base.table.mass_kg),
-        Effect::FrictionAsymmetry => friction_ratio_start(c, base).map(|r| vec![r]),
-        Effect::FlowAsymmetry => flow_ratio_start(c).map(|r| vec![r]),
-        Effect::FreePlay => free_play_start(c, base, ROD_MASS_FRACTION * base.table.mass_kg),
-        _ => None,
-    }
+/// The start of `effect` read off the data (its row's
+/// [`super::effect_table::Row::informed`]: the foundation's and the free play's from the
+/// LVDT/accelerometer discrepancy), fitted by [`super::candidates::fit_candidate`]
+/// whatever the screening says.
+pub(super) fn informed_start(effect: Effect, c: &Campaign, base: &Params) -> Option<EffectValues> {
+    let read = effect.row().informed?;
+    read(&StartsFrom {
+        effect,
+        c,
+        base,
+        informed: None,
+    })
 }
 
 /// Foundation starts from R3 (the broadest band; R2, R1 otherwise): the LVDT reads the
@@ -342,14 +418,19 @@ pub(super) fn informed_start(effect: Effect, c: &Campaign, base: &Params) -> Opt
 /// half-power width the damping. Returns `(M_f, f_f, zeta)` from the peak (the peak is
 /// read where coherence is high, at 0.25 Hz resolution: a lightly damped mode is narrower
 /// than the 0.5 Hz the other spectra use), or None when `D` has no clear peak.
-pub(super) fn foundation_start(c: &Campaign, table_mass_kg: f64) -> Option<Vec<f64>> {
+pub(super) fn foundation_start(c: &Campaign, table_mass_kg: f64) -> Option<EffectValues> {
     let d = Discrepancy::read(c)?;
     let k = d.clear_peak()?;
     let f_peak = d.frequency_hz[k];
     let zeta = d.half_power_damping(k);
     let ratio = d.mass_ratio(k);
     let f_f = f_peak * (1.0 + ratio).sqrt();
-    Some(vec![table_mass_kg / ratio, f_f, zeta])
+    Some(resonance(
+        Effect::of(&crate::effects::foundation::EFFECT),
+        table_mass_kg / ratio,
+        f_f,
+        zeta,
+    ))
 }
 
 /// Thresholds of [`foundation_start`]'s reading of the discrepancy `D`.
@@ -505,12 +586,27 @@ mod tests {
     /// The frequency whose starts are told apart is the foundation's and the newest mode's.
     #[test]
     fn the_valley_frequency_is_the_resonance_a_fit_adds() {
-        let key = |e: Effect| e.valley_frequency().map(|k| e.parameters()[k]);
-        assert_eq!(key(Effect::Foundation), Some("frequency_hz"));
-        assert_eq!(key(Effect::SpecimenTwoModes), Some("mode2.frequency_hz"));
-        assert_eq!(key(Effect::SpecimenThreeModes), Some("mode3.frequency_hz"));
-        assert_eq!(key(Effect::Specimen), Some("frequency_hz"));
-        assert_eq!(key(Effect::ValveDeadband), None);
+        let key = |e: Effect| e.valley_frequency();
+        assert_eq!(
+            key(Effect::of(&crate::effects::foundation::EFFECT)),
+            Some("frequency_hz")
+        );
+        assert_eq!(
+            key(Effect::specimen(2).unwrap()),
+            Some("mode2.frequency_hz")
+        );
+        assert_eq!(
+            key(Effect::specimen(3).unwrap()),
+            Some("mode3.frequency_hz")
+        );
+        assert_eq!(
+            key(Effect::of(&crate::effects::specimen::EFFECT)),
+            Some("frequency_hz")
+        );
+        assert_eq!(
+            key(Effect::of(&crate::effects::valve_deadband::EFFECT)),
+            None
+        );
     }
 
     use crate::campaign::synth::{synthesise, SynthOptions};
@@ -546,9 +642,9 @@ mod tests {
                 "specimen:mass_kg=16500,frequency_hz={fitted_f1},damping_ratio=0.025"
             ))
             .unwrap();
-            let s = higher_mode_starts(&c, &base);
+            let s = higher_mode_starts(Effect::specimen(2).unwrap(), &c, &base);
             // the first start takes every mode afresh at the highest measured peaks
-            let afresh = [s[0][1], s[0][4]];
+            let afresh = [s[0].get("frequency_hz"), s[0].get("mode2.frequency_hz")];
             for (got, want) in afresh.iter().zip([f1, f2]) {
                 assert!(
                     (got / want - 1.0).abs() < 0.05,
@@ -556,7 +652,10 @@ mod tests {
                 );
             }
             // the others keep mode 1 as fitted
-            let mut at: Vec<f64> = s[1..].iter().map(|start| start[4]).collect();
+            let mut at: Vec<f64> = s[1..]
+                .iter()
+                .map(|start| start.get("mode2.frequency_hz"))
+                .collect();
             at.dedup();
             assert!(at.len() <= FURTHER_MODE_FREQUENCIES, "seed {seed}: {at:?}");
             assert!(
@@ -564,7 +663,14 @@ mod tests {
                 "seed {seed}: starts at {at:?} Hz for {f2} Hz"
             );
             for start in &s[1..] {
-                assert_eq!(start[..3], [16500.0, fitted_f1, 0.025]);
+                assert_eq!(
+                    mode_of(start),
+                    SpecimenMode {
+                        mass_kg: 16500.0,
+                        frequency_hz: fitted_f1,
+                        damping_ratio: 0.025
+                    }
+                );
             }
         }
     }

@@ -2,15 +2,63 @@
 //! predictive score (its chatter has no reproducible phase).
 
 use super::baseline::refine_output_error;
-use super::candidates::FitContext;
+use super::candidates::{FitContext, ScoreFit};
 use super::effect::Effect;
+use super::effect_values::{EffectBounds, EffectValues};
 use super::part::Part;
-use super::{residuals, stribeck};
+use super::residuals::{self, NoiseFloor};
+use super::stribeck::{self, CurveFit};
+use crate::campaign::Campaign;
 use crate::params::Params;
 use rayon::prelude::*;
 
-/// A stick-slip model on a base: `(r_s, v_s, F_mu) -> (score, effect parameters, model)`.
-pub(super) type StickSlipEval<'a> = dyn Fn(f64, f64, f64) -> (f64, Vec<f64>, Params) + Sync + 'a;
+/// A point of stick-slip's fit: the effect's static ratio and Stribeck velocity, and the
+/// baseline's friction amplitude (which absorbed part of the static friction).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub(super) struct StickSlipPoint {
+    pub static_ratio: f64,
+    pub stribeck_velocity_m_s: f64,
+    pub friction_n: f64,
+}
+
+/// Stick-slip models on one base, scored on the predictive score over the fitting halves
+/// of the signature tests.
+pub(super) struct StickSlipScore<'a> {
+    base: Params,
+    c: &'a Campaign,
+    sig: &'a [usize],
+    noise: &'a NoiseFloor,
+}
+
+impl StickSlipScore<'_> {
+    /// The score, the effect's values and the model at `x`.
+    pub(super) fn eval(&self, x: StickSlipPoint) -> ScoreFit {
+        let mut p = self.base;
+        let values = EffectValues::new(
+            Effect::of(&crate::effects::stick_slip::EFFECT),
+            &[
+                ("static_ratio", x.static_ratio),
+                ("stribeck_velocity_m_s", x.stribeck_velocity_m_s),
+            ],
+        );
+        values.apply(&mut p);
+        p.friction.force_n = x.friction_n;
+        ScoreFit {
+            score: residuals::score_sum(&p, self.c, self.sig, self.noise, Part::Fit),
+            values,
+            params: p,
+        }
+    }
+}
+
+/// The point of the fit `f` with the friction amplitude `friction_n`.
+fn point_of(f: &ScoreFit, friction_n: f64) -> StickSlipPoint {
+    StickSlipPoint {
+        static_ratio: f.values.get("static_ratio"),
+        stribeck_velocity_m_s: f.values.get("stribeck_velocity_m_s"),
+        friction_n,
+    }
+}
 
 /// Stick-slip on the predictive score (see [`residuals`]): its chatter grows out of the
 /// sensor noise, so finite-difference gradients of a sample-wise residual are noise,
@@ -21,38 +69,30 @@ pub(super) type StickSlipEval<'a> = dyn Fn(f64, f64, f64) -> (f64, Vec<f64>, Par
 /// Nelder-Mead, then unbends the baseline by output error with that stick-slip in place
 /// (the refinement had raised the friction and shrunk its yield displacement to absorb
 /// the static peaks) and polishes again while the score improves.
-pub(super) fn fit_stick_slip(
-    base: &Params,
-    sig: &[usize],
-    ctx: &FitContext,
-) -> Option<(f64, Vec<f64>, Params)> {
-    let (c, noise) = (ctx.c, ctx.noise);
-    let e = Effect::StickSlip;
-    let eval_on = |base: Params| {
-        move |r: f64, v: f64, f_mu: f64| -> (f64, Vec<f64>, Params) {
-            let mut p = base;
-            let t = vec![r, v];
-            e.apply(&mut p, &t);
-            p.friction.force_n = f_mu;
-            (residuals::score_sum(&p, c, sig, noise, Part::Fit), t, p)
-        }
+pub(super) fn fit_stick_slip(base: &Params, sig: &[usize], ctx: &FitContext) -> Option<ScoreFit> {
+    let c = ctx.c;
+    let score_on = |base: Params| StickSlipScore {
+        base,
+        c,
+        sig,
+        noise: ctx.noise,
     };
-    let eval = eval_on(*base);
-    let bounds = e.bounds(base);
+    let eval = score_on(*base);
+    let bounds = Effect::of(&crate::effects::stick_slip::EFFECT).bounds(base);
     let start = match stribeck::fit_curve(&stribeck::measured_curve(c, base, sig)) {
         Some(curve) => curve_start(curve),
         None => grid_stick_slip(&eval, base.friction.force_n, &bounds)?,
     };
     let mut best = polish_stick_slip(&eval, start, &bounds)?;
-    if best.1[0] < 1.0 + NEGLIGIBLE_STATIC_EXCESS {
+    if best.values.get("static_ratio") < 1.0 + NEGLIGIBLE_STATIC_EXCESS {
         // no static peak: nothing bent the baseline
         return Some(best);
     }
     for _ in 0..UNBENDING_ROUNDS {
         let Some(unbent) = refine_output_error(
             c,
-            &best.2,
-            &[(e, &best.1)],
+            &best.params,
+            std::slice::from_ref(&best.values),
             base,
             ctx.fit_idx,
             ctx.whitening,
@@ -62,11 +102,11 @@ pub(super) fn fit_stick_slip(
         };
         let unbent = unbent.params;
         let next = polish_stick_slip(
-            &eval_on(unbent),
-            [best.1[0], best.1[1], unbent.friction.force_n],
+            &score_on(unbent),
+            point_of(&best, unbent.friction.force_n),
             &bounds,
         )?;
-        if next.0 >= best.0 {
+        if next.score >= best.score {
             break;
         }
         best = next;
@@ -78,15 +118,18 @@ pub(super) fn fit_stick_slip(
 /// by more than its noise (the issue measured 2 noise RMS for a 1.3 ratio).
 pub(super) const NEGLIGIBLE_STATIC_EXCESS: f64 = 0.05;
 
-/// The polish's start `[r_s, v_s, F_mu]` from the curve's fit `[F_mu, r_s, v_s]`, the
-/// ratio and the velocity kept within [`CURVE_START_RATIO`] and
-/// [`CURVE_START_STRIBECK_M_S`].
-fn curve_start([f_mu, r, v]: [f64; 3]) -> [f64; 3] {
-    [
-        r.clamp(CURVE_START_RATIO[0], CURVE_START_RATIO[1]),
-        v.clamp(CURVE_START_STRIBECK_M_S[0], CURVE_START_STRIBECK_M_S[1]),
-        f_mu,
-    ]
+/// The polish's start from the curve's fit, the ratio and the velocity kept within
+/// [`CURVE_START_RATIO`] and [`CURVE_START_STRIBECK_M_S`].
+fn curve_start(curve: CurveFit) -> StickSlipPoint {
+    StickSlipPoint {
+        static_ratio: curve
+            .static_ratio
+            .clamp(CURVE_START_RATIO[0], CURVE_START_RATIO[1]),
+        stribeck_velocity_m_s: curve
+            .stribeck_velocity_m_s
+            .clamp(CURVE_START_STRIBECK_M_S[0], CURVE_START_STRIBECK_M_S[1]),
+        friction_n: curve.kinetic_n,
+    }
 }
 
 /// Where the curve's static ratio may start the polish: at least a 5 % static excess (the
@@ -138,19 +181,24 @@ pub(super) const UNBENDING_ITERATIONS: usize = 4;
 /// campaign; the second rarely moves the score by a percent).
 pub(super) const UNBENDING_ROUNDS: usize = 2;
 
-/// `[r_s, v_s, F_mu]` from a grid over (static ratio, Stribeck velocity) with geometric
-/// steps, refined twice around the best point (kept within the fitting `bounds`: a
-/// refinement step past the coarse grid's edge once landed at a static ratio of 8.5),
-/// then five friction amplitudes.
-pub(super) fn grid_stick_slip(
-    eval: &StickSlipEval,
+/// The point from a grid over (static ratio, Stribeck velocity) with geometric steps,
+/// refined twice around the best point (kept within the fitting `bounds`: a refinement
+/// step past the coarse grid's edge once landed at a static ratio of 8.5), then five
+/// friction amplitudes.
+fn grid_stick_slip(
+    eval: &StickSlipScore,
     f0: f64,
-    bounds: &(Vec<f64>, Vec<f64>),
-) -> Option<[f64; 3]> {
-    let best_of = |pts: Vec<(f64, f64, f64)>| {
+    bounds: &EffectBounds,
+) -> Option<StickSlipPoint> {
+    let best_of = |pts: Vec<StickSlipPoint>| {
         pts.par_iter()
-            .map(|&(r, v, f)| eval(r, v, f))
-            .min_by(|a, b| a.0.total_cmp(&b.0))
+            .map(|&x| eval.eval(x))
+            .min_by(|a, b| a.score.total_cmp(&b.score))
+    };
+    let at = |static_ratio, stribeck_velocity_m_s, friction_n| StickSlipPoint {
+        static_ratio,
+        stribeck_velocity_m_s,
+        friction_n,
     };
     // ratios 1.1-5 and Stribeck velocities 0.3-20 mm/s, geometric steps, then two finer
     // 3 x 3 grids (half and quarter steps) around the best point
@@ -161,67 +209,80 @@ pub(super) fn grid_stick_slip(
     let speeds: Vec<f64> = (0..GRID_POINTS)
         .map(|k| GRID_STRIBECK_M_S * sv.powi(k))
         .collect();
-    let coarse: Vec<(f64, f64, f64)> = ratios
+    let coarse: Vec<StickSlipPoint> = ratios
         .iter()
-        .flat_map(|&r| speeds.iter().map(move |&v| (r, v, f0)))
+        .flat_map(|&r| speeds.iter().map(move |&v| at(r, v, f0)))
         .collect();
-    let (_, mut t, _) = best_of(coarse)?;
-    let (lower, upper) = bounds;
+    let mut t = best_of(coarse)?.values;
+    let (ratio, speed) = ("static_ratio", "stribeck_velocity_m_s");
+    let (lower, upper) = (&bounds.lower, &bounds.upper);
     for refinement in GRID_REFINEMENTS {
-        let (r0, v0) = (t[0] - 1.0, t[1]);
+        let (r0, v0) = (t.get(ratio) - 1.0, t.get(speed));
         let mut fine = Vec::new();
         for i in -1..=1 {
             for j in -1..=1 {
-                fine.push((
-                    (1.0 + r0 * sr.powf(refinement * i as f64)).clamp(lower[0], upper[0]),
-                    (v0 * sv.powf(refinement * j as f64)).clamp(lower[1], upper[1]),
+                fine.push(at(
+                    (1.0 + r0 * sr.powf(refinement * i as f64))
+                        .clamp(lower.get(ratio), upper.get(ratio)),
+                    (v0 * sv.powf(refinement * j as f64)).clamp(lower.get(speed), upper.get(speed)),
                     f0,
                 ));
             }
         }
-        t = best_of(fine)?.1;
+        t = best_of(fine)?.values;
     }
     // the friction amplitude: the baseline's absorbed part of the static friction
-    let (_, t, p) = best_of(
+    let best = best_of(
         GRID_FRICTION_FACTORS
             .iter()
-            .map(|k| (t[0], t[1], k * f0))
+            .map(|k| at(t.get(ratio), t.get(speed), k * f0))
             .collect(),
     )?;
-    Some([t[0], t[1], p.friction.force_n])
+    Some(point_of(&best, best.params.friction.force_n))
 }
 
 /// Nelder-Mead (argmin) over `(ln(r_s - 1), ln v_s, ln F_mu)` from `start`: the score is
 /// smooth but its finite-difference gradient is not trustworthy at chatter onset, and
 /// three parameters need no more than a few dozen evaluations. Returns the best point
 /// seen (the start itself when nothing beats it). `bounds` are the effect's fitting
-/// bounds (lower, upper: static ratio, Stribeck velocity).
-pub(super) fn polish_stick_slip(
-    eval: &StickSlipEval,
-    start: [f64; 3],
-    bounds: &(Vec<f64>, Vec<f64>),
-) -> Option<(f64, Vec<f64>, Params)> {
+/// bounds.
+fn polish_stick_slip(
+    eval: &StickSlipScore,
+    start: StickSlipPoint,
+    bounds: &EffectBounds,
+) -> Option<ScoreFit> {
     use argmin::core::{CostFunction, Executor};
     use argmin::solver::neldermead::NelderMead;
-    // the simplex coordinates -> (r_s, v_s, F_mu)
-    fn point(x: &[f64]) -> (f64, f64, f64) {
-        (1.0 + x[0].exp(), x[1].exp(), x[2].exp())
+    // the simplex coordinates -> the point
+    fn point(x: &[f64]) -> StickSlipPoint {
+        StickSlipPoint {
+            static_ratio: 1.0 + x[0].exp(),
+            stribeck_velocity_m_s: x[1].exp(),
+            friction_n: x[2].exp(),
+        }
     }
-    struct Score<'a, 'b>(&'a StickSlipEval<'b>, &'a (Vec<f64>, Vec<f64>));
+    struct Score<'a, 'b>(&'a StickSlipScore<'b>, &'a EffectBounds);
     impl CostFunction for Score<'_, '_> {
         type Param = Vec<f64>;
         type Output = f64;
         fn cost(&self, x: &Vec<f64>) -> Result<f64, argmin::core::Error> {
-            let (r, v, f) = point(x);
-            let (lower, upper) = self.1;
-            if !((lower[0]..=upper[0]).contains(&r) && (lower[1]..=upper[1]).contains(&v)) {
+            let at = point(x);
+            let (lower, upper) = (&self.1.lower, &self.1.upper);
+            let (ratio, speed) = ("static_ratio", "stribeck_velocity_m_s");
+            if !((lower.get(ratio)..=upper.get(ratio)).contains(&at.static_ratio)
+                && (lower.get(speed)..=upper.get(speed)).contains(&at.stribeck_velocity_m_s))
+            {
                 return Ok(f64::INFINITY);
             }
-            Ok((self.0)(r, v, f).0)
+            Ok(self.0.eval(at).score)
         }
     }
-    let first = eval(start[0], start[1], start[2]);
-    let x0 = vec![(start[0] - 1.0).ln(), start[1].ln(), start[2].ln()];
+    let first = eval.eval(start);
+    let x0 = vec![
+        (start.static_ratio - 1.0).ln(),
+        start.stribeck_velocity_m_s.ln(),
+        start.friction_n.ln(),
+    ];
     let mut simplex = vec![x0.clone()];
     for (k, h) in POLISH_STEPS.iter().enumerate() {
         let mut x = x0.clone();
@@ -229,19 +290,16 @@ pub(super) fn polish_stick_slip(
         simplex.push(x);
     }
     let solver = NelderMead::new(simplex)
-        .with_sd_tolerance(POLISH_SPREAD_TOLERANCE * first.0)
+        .with_sd_tolerance(POLISH_SPREAD_TOLERANCE * first.score)
         .ok()?;
     let best = Executor::new(Score(eval, bounds), solver)
         .configure(|s| s.max_iters(POLISH_ITERATIONS))
         .run()
         .ok()
         .and_then(|r| r.state.best_param)
-        .map(|x| {
-            let (r, v, f) = point(&x);
-            eval(r, v, f)
-        });
+        .map(|x| eval.eval(point(&x)));
     match best {
-        Some(b) if b.0 < first.0 => Some(b),
+        Some(b) if b.score < first.score => Some(b),
         _ => Some(first),
     }
 }

@@ -70,74 +70,149 @@ pub struct CurvePoint {
 /// tests among `tests`, with `base`'s mass, stiffness and yield displacement. Empty when
 /// the tests never slide slowly.
 pub fn measured_curve(c: &Campaign, base: &Params, tests: &[usize]) -> Vec<CurvePoint> {
-    let nb = BIN_EDGES_M_S.len() - 1;
-    let mut sum = vec![(0.0, 0.0, 0usize); nb];
-    let h = SLOPE_HALF_WIDTH;
-    // sum of k^2 for k = -h..=h: the slope estimator's normaliser
-    let norm = (h * (h + 1) * (2 * h + 1)) as f64 / 3.0;
-    let saturated = SATURATED_YIELDS * base.friction.yield_displacement_m;
+    let mut bins = SpeedBins::new();
+    let saturated_m = SATURATED_YIELDS * base.friction.yield_displacement_m;
     for &i in tests {
         if c.info.tests[i].kind == TestKind::Random {
             continue;
         }
+        if let Some(test) = SlowTest::read(c, i) {
+            test.add_to(&mut bins, base, saturated_m);
+        }
+    }
+    bins.points()
+}
+
+/// Sum of `k^2` for `k = -h..=h` (`h` = [`SLOPE_HALF_WIDTH`]): the slope estimator's
+/// normaliser.
+const SLOPE_NORM: f64 =
+    (SLOPE_HALF_WIDTH * (SLOPE_HALF_WIDTH + 1) * (2 * SLOPE_HALF_WIDTH + 1)) as f64 / 3.0;
+
+/// The speed at sample `k` of `x` sampled at `fs_hz`: the slope of the straight line
+/// fitted over [`SLOPE_HALF_WIDTH`] samples either side, m/s.
+fn slope_speed(x: &[f64], k: usize, fs_hz: f64) -> f64 {
+    let h = SLOPE_HALF_WIDTH;
+    (1..=h)
+        .map(|j| j as f64 * (x[k + j] - x[k - j]))
+        .sum::<f64>()
+        * fs_hz
+        / SLOPE_NORM
+}
+
+/// The sums per speed bin ([`BIN_EDGES_M_S`]): speed, friction amplitude, samples.
+struct SpeedBins {
+    sum: Vec<(f64, f64, usize)>,
+}
+
+impl SpeedBins {
+    fn new() -> SpeedBins {
+        SpeedBins {
+            sum: vec![(0.0, 0.0, 0usize); BIN_EDGES_M_S.len() - 1],
+        }
+    }
+
+    /// Add a sample of speed `speed_m_s` (its magnitude) and friction amplitude
+    /// `friction_n` (signed by the motion) to its bin; a speed beyond the bins is dropped.
+    fn add(&mut self, speed_m_s: f64, friction_n: f64) {
+        let Some(b) = BIN_EDGES_M_S
+            .windows(2)
+            .position(|e| (e[0]..e[1]).contains(&speed_m_s))
+        else {
+            return;
+        };
+        self.sum[b].0 += speed_m_s;
+        self.sum[b].1 += friction_n;
+        self.sum[b].2 += 1;
+    }
+
+    /// The mean of each bin with at least [`MIN_BIN_SAMPLES`].
+    fn points(self) -> Vec<CurvePoint> {
+        self.sum
+            .into_iter()
+            .filter(|s| s.2 >= MIN_BIN_SAMPLES)
+            .map(|(v, f, n)| CurvePoint {
+                speed_m_s: v / n as f64,
+                friction_n: f / n as f64,
+                samples: n,
+            })
+            .collect()
+    }
+}
+
+/// The channels of one slow test the friction balance needs, and its fitting half.
+struct SlowTest<'a> {
+    displacement_m: &'a [f64],
+    acceleration_m_s2: &'a [f64],
+    force_n: &'a [f64],
+    fs_hz: f64,
+    fit: std::ops::Range<usize>,
+}
+
+impl<'a> SlowTest<'a> {
+    /// Test `i` of `c`; `None` without displacement, acceleration and force (the friction
+    /// balance needs the three) or with a fitting half too short for the slope.
+    fn read(c: &'a Campaign, i: usize) -> Option<SlowTest<'a>> {
         let r = &c.records[i];
-        let fs = c.sample_rate_of(i);
-        let (Some(xs), Some(accel), Some(force)) = (
+        let (Some(displacement_m), Some(acceleration_m_s2), Some(force_n)) = (
             r.displacement_m.as_deref(),
             r.acceleration_m_s2.as_deref(),
             r.force_n.as_deref(),
         ) else {
-            continue; // the friction balance needs the three
+            return None;
         };
-        let range = Part::Fit.range(r.len());
-        if range.len() <= 2 * h + 1 {
-            continue;
-        }
-        let x = &xs[range.clone()];
+        let fit = Part::Fit.range(r.len());
+        (fit.len() > 2 * SLOPE_HALF_WIDTH + 1).then_some(SlowTest {
+            displacement_m,
+            acceleration_m_s2,
+            force_n,
+            fs_hz: c.sample_rate_of(i),
+            fit,
+        })
+    }
+
+    /// Add the friction amplitude `F_D sign(v) = (F_A - M a - K x) sign(v)` (eq. 4.13) of
+    /// every sample slid `saturated_m` past its last reversal (`|Z| = 1`, eq. 4.15) to
+    /// `bins`, with `base`'s mass and stiffness.
+    fn add_to(&self, bins: &mut SpeedBins, base: &Params, saturated_m: f64) {
+        let h = SLOPE_HALF_WIDTH;
+        let xs = self.displacement_m;
+        let x = &xs[self.fit.clone()];
         let mut turned_at = x[h];
         let mut last_sign = 0.0;
         for k in h..x.len() - h {
-            let v = (1..=h)
-                .map(|j| j as f64 * (x[k + j] - x[k - j]))
-                .sum::<f64>()
-                * fs
-                / norm;
+            let v = slope_speed(x, k, self.fs_hz);
             let sign = v.signum();
             if sign != last_sign {
                 turned_at = x[k];
                 last_sign = sign;
             }
-            if (x[k] - turned_at).abs() < saturated {
+            if (x[k] - turned_at).abs() < saturated_m {
                 continue;
             }
-            let Some(b) = BIN_EDGES_M_S
-                .windows(2)
-                .position(|e| (e[0]..e[1]).contains(&v.abs()))
-            else {
-                continue;
-            };
-            let n = range.start + k;
-            let friction =
-                force[n] - base.table.mass_kg * accel[n] - base.table.stiffness_n_m * xs[n];
-            sum[b].0 += v.abs();
-            sum[b].1 += friction * sign;
-            sum[b].2 += 1;
+            let n = self.fit.start + k;
+            let friction = self.force_n[n]
+                - base.table.mass_kg * self.acceleration_m_s2[n]
+                - base.table.stiffness_n_m * xs[n];
+            bins.add(v.abs(), friction * sign);
         }
     }
-    sum.into_iter()
-        .filter(|s| s.2 >= MIN_BIN_SAMPLES)
-        .map(|(v, f, n)| CurvePoint {
-            speed_m_s: v / n as f64,
-            friction_n: f / n as f64,
-            samples: n,
-        })
-        .collect()
 }
 
-/// `(F_mu, r_s, v_s)` fitted to the measured curve (each bin weighted by its samples),
-/// or None when the curve has too few bins or no fit converges. A curve without a
-/// static peak gives `r_s` near 1.
-pub fn fit_curve(curve: &[CurvePoint]) -> Option<[f64; 3]> {
+/// The friction-velocity curve's parameters, `F_mu (1 + (r_s - 1) exp(-(v/v_s)^2))`.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct CurveFit {
+    /// The kinetic friction amplitude `F_mu`, N.
+    pub kinetic_n: f64,
+    /// The static ratio `r_s`.
+    pub static_ratio: f64,
+    /// The Stribeck velocity `v_s`, m/s.
+    pub stribeck_velocity_m_s: f64,
+}
+
+/// The curve fitted to the measured one (each bin weighted by its samples), or None when
+/// the curve has too few bins or no fit converges. A curve without a static peak gives
+/// `r_s` near 1.
+pub fn fit_curve(curve: &[CurvePoint]) -> Option<CurveFit> {
     if curve.len() < MIN_CURVE_BINS {
         return None;
     }
@@ -175,7 +250,12 @@ pub fn fit_curve(curve: &[CurvePoint]) -> Option<[f64; 3]> {
             parallel: false,
         },
     )?;
-    Some([fit.theta[0], fit.theta[1], fit.theta[2]])
+    // the least-squares vector's layout: the start's above
+    Some(CurveFit {
+        kinetic_n: fit.theta[0],
+        static_ratio: fit.theta[1],
+        stribeck_velocity_m_s: fit.theta[2],
+    })
 }
 
 #[cfg(test)]
@@ -202,13 +282,15 @@ mod tests {
             .unwrap();
         let sig: Vec<usize> = (0..18).collect();
         let c = synthesise(&sticky, &opts, None);
-        let [f, r, v] = fit_curve(&measured_curve(&c, &truth, &sig)).unwrap();
+        let fit = fit_curve(&measured_curve(&c, &truth, &sig)).unwrap();
+        let (f, r, v) = (fit.kinetic_n, fit.static_ratio, fit.stribeck_velocity_m_s);
         assert!((f / 4000.0 - 1.0).abs() < 0.03, "F_mu {f}");
         assert!((r / 2.2 - 1.0).abs() < 0.2, "r_s {r}");
         assert!((v / 0.005 - 1.0).abs() < 0.5, "v_s {v}");
         truth.stick_slip.enabled = false;
         let c = synthesise(&truth, &opts, None);
-        let [f, r, _] = fit_curve(&measured_curve(&c, &truth, &sig)).unwrap();
+        let fit = fit_curve(&measured_curve(&c, &truth, &sig)).unwrap();
+        let (f, r) = (fit.kinetic_n, fit.static_ratio);
         assert!((f / 4000.0 - 1.0).abs() < 0.03, "F_mu {f}");
         assert!(r < 1.1, "bare table r_s {r}");
     }

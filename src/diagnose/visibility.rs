@@ -8,6 +8,7 @@
 //! that cell ([`MISS_RATIO`]). Lighter specimens are invisible in these records.
 
 use super::effect::Effect;
+use super::effect_values::EffectValues;
 use super::residuals::{simulate_test, Whitening};
 use super::MISS_RATIO;
 use crate::campaign::Campaign;
@@ -71,7 +72,7 @@ fn rule() -> String {
 /// (the diagnosis' whitening weighs the channels); `None` when no signature test of the
 /// specimen is weighed or `p` cannot be simulated on them.
 pub fn specimen_visibility(p: &Params, c: &Campaign, whitening: &Whitening) -> Option<Visibility> {
-    let effect = Effect::Specimen;
+    let effect = Effect::of(&crate::effects::specimen::EFFECT);
     let tests: Vec<usize> = effect
         .signature_tests(c, p)
         .into_iter()
@@ -84,12 +85,17 @@ pub fn specimen_visibility(p: &Params, c: &Campaign, whitening: &Whitening) -> O
             .collect()
     };
     let without = runs(p).filter(|r| !r.is_empty())?;
-    let (lo, hi) = effect.bounds(p);
-    let (m_lo, m_hi) = (lo[0], hi[0]);
+    let bounds = effect.bounds(p);
+    let (m_lo, m_hi) = (bounds.lower.get("mass_kg"), bounds.upper.get("mass_kg"));
     let table = p.table.mass_kg;
     let visible = |f: f64, m: f64| -> bool {
         let mut q = *p;
-        effect.apply(&mut q, &[m, f, PROBE_DAMPING_RATIO]);
+        let probe = [
+            ("mass_kg", m),
+            ("frequency_hz", f),
+            ("damping_ratio", PROBE_DAMPING_RATIO),
+        ];
+        EffectValues::new(effect, &probe).apply(&mut q);
         let Some(with) = runs(&q) else {
             // a specimen that drives the table out of its envelope shows
             return true;

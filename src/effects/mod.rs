@@ -14,9 +14,15 @@
 //!    `friction.rs`, `payload.rs`, ...). An effect with states of its own (an oscillator,
 //!    the free play's rod) also lists them in `src/fmi/variables/states.rs` and, where the
 //!    linearisation applies, in `src/linear/` (`plant.rs`, `jacobian.rs`).
-//! 4. For the diagnosis: a variant of [`crate::diagnose::Effect`] (in the catalogue's
-//!    order, with the paper's tests its signature picks), and its starts in
-//!    `src/diagnose/starts.rs` (a grid, and a start read off the data where one can be).
+//! 4. For the diagnosis: one row in the table of `src/diagnose/effect_table.rs` (the
+//!    diagnosis reads the effect's catalogue entry through it): its starts (a grid built
+//!    by parameter key with `EffectValues`, helpers in `src/diagnose/starts.rs`), its start
+//!    read off the data where one can be, which fit it takes (output error, or on the
+//!    predictive score for an effect without a reproducible phase), and the resonance
+//!    frequency whose starts lie in different valleys, if any, and what its starts take
+//!    out of the identified baseline (a specimen's mass, a foundation's spring). The
+//!    search fits the effects in the catalogue's order; the table's unit test checks
+//!    that it covers the catalogue exactly.
 //! 5. Tests: the catalogue tests below check that every parameter appears once in the
 //!    parameter file, in the FMU variables and in `--effect` parsing, with unique names
 //!    and value references; add a physics test of the effect in `tests/physics.rs` and a
@@ -24,8 +30,8 @@
 //!
 //! The parameter validation, `numeric_entries`, the `--effect name:key=value` syntax and
 //! its help, the FMU variable rows (`src/fmi/variables/table.rs`), campaign synthesis, the
-//! diagnosis' parameters, fitting bounds (scaled to the table), evidence rule and
-//! testability read the catalogue; nothing else needs an edit.
+//! diagnosis' parameters, fitting bounds (scaled to the table), evidence rule,
+//! testability and JSON names read the catalogue; nothing else needs an edit.
 
 pub mod flow_asymmetry;
 pub mod flow_saturation;

@@ -4,9 +4,10 @@
 //! accepted cause settled before a further search ([`Diagnoser::settle`]).
 
 use super::Diagnoser;
-use crate::diagnose::baseline::{refine_output_error, Refined};
+use crate::diagnose::baseline::{refine_output_error, FreedFit, Refined};
 use crate::diagnose::candidates::{scored_candidate, Fitted, Hold};
 use crate::diagnose::effect::Effect;
+use crate::diagnose::effect_values::{EffectBounds, EffectValues};
 use crate::diagnose::missed::Missed;
 use crate::diagnose::output::Candidate;
 use crate::diagnose::EXPLAINED_RATIO;
@@ -29,43 +30,36 @@ pub(super) fn explains(c: &Candidate) -> bool {
 /// model that lacks one is bent by it (a deadband fitted before the specimen was 0.26 %
 /// narrow, which alone left the slow tests' displacement twice the floor, seed 803 at full
 /// length). Those fitted on the score stay held in `p0`, as the refinement holds them.
-fn accepted_before(from: &Candidate, p0: &Params) -> Vec<(Effect, Vec<f64>)> {
+fn accepted_before(from: &Candidate, p0: &Params) -> Vec<EffectValues> {
     Effect::present_in(p0)
         .into_iter()
         .filter(|e| e.name() != from.effect.name() && !e.fitted_on_score())
-        .map(|e| (e, e.read(p0)))
+        .map(|e| EffectValues::read(e, p0))
         .collect()
 }
 
-/// The polished effect's own uncertainties and fitting bounds, and the causes accepted
-/// before with their refitted uncertainties, from a refinement `r` of `effect` (its
-/// parameters first, then `accepted`'s, in the order given).
+/// The polished effect's own uncertainties and fitting bounds (`None` when the polish
+/// held it), and the refitted uncertainties of the causes accepted before, from a
+/// refinement `r` of `effect` and those causes.
 struct SplitSigma {
-    own_sigma: Vec<f64>,
-    own_bounds: (Vec<f64>, Vec<f64>),
-    refitted_sigma: Vec<(Effect, Vec<f64>)>,
+    own: Option<FreedFit>,
+    refitted_sigma: Vec<EffectValues>,
 }
 
 impl SplitSigma {
-    /// The refinement lists the freed effects' sigmas and bounds in the order given, this
-    /// one's first; an effect fitted on the score is held and listed nowhere.
-    fn of(r: &Refined, effect: Effect, own_len: usize, accepted: &[(Effect, Vec<f64>)]) -> Self {
-        let own = if effect.fitted_on_score() { 0 } else { own_len };
-        let mut at = own;
-        let refitted_sigma: Vec<(Effect, Vec<f64>)> = accepted
-            .iter()
-            .map(|(e, t)| {
-                at += t.len();
-                (*e, r.effect_sigma[at - t.len()..at].to_vec())
-            })
-            .collect();
-        debug_assert_eq!(at, r.effect_sigma.len());
+    /// The refinement lists the freed effects in the order given, this one first; an
+    /// effect fitted on the score is held and listed nowhere.
+    fn of(r: Refined, effect: Effect, accepted: &[EffectValues]) -> Self {
+        let mut freed = r.effects.into_iter();
+        let own = if effect.fitted_on_score() {
+            None
+        } else {
+            freed.next()
+        };
+        let refitted_sigma: Vec<EffectValues> = freed.map(|f| f.sigma).collect();
+        debug_assert_eq!(refitted_sigma.len(), accepted.len());
         SplitSigma {
-            own_sigma: r.effect_sigma[..own].to_vec(),
-            own_bounds: (
-                r.effect_bounds.0[..own].to_vec(),
-                r.effect_bounds.1[..own].to_vec(),
-            ),
+            own,
             refitted_sigma,
         }
     }
@@ -74,15 +68,17 @@ impl SplitSigma {
 /// The polished candidate's uncertainties: the refinement's `own_sigma`, or, when the
 /// polish held the effect (fitted on the score), the fit's own from `from` (none: the
 /// score's fit gives none).
-fn polished_sigma(from: &Candidate, own_sigma: Vec<f64>) -> Vec<f64> {
-    if own_sigma.is_empty() && from.sigma.is_empty() {
-        Vec::new()
-    } else if own_sigma.is_empty() {
-        from.effect
+fn polished_sigma(from: &Candidate, own_sigma: Option<EffectValues>) -> Option<EffectValues> {
+    if own_sigma.is_none() && from.sigma.is_empty() {
+        None
+    } else if own_sigma.is_none() {
+        let pairs: Vec<(&str, f64)> = from
+            .effect
             .parameters()
-            .iter()
-            .map(|k| from.sigma.get(*k).copied().unwrap_or(f64::NAN))
-            .collect()
+            .into_iter()
+            .map(|k| (k, from.sigma.get(k).copied().unwrap_or(f64::NAN)))
+            .collect();
+        Some(EffectValues::new(from.effect, &pairs))
     } else {
         own_sigma
     }
@@ -100,17 +96,18 @@ impl Diagnoser<'_> {
         missed: &Missed,
         hold: &Hold,
     ) -> Option<Candidate> {
-        let theta: Vec<f64> = from
+        let pairs: Vec<(&str, f64)> = from
             .effect
             .parameters()
-            .iter()
-            .map(|n| from.parameters[*n])
+            .into_iter()
+            .map(|n| (n, from.parameters[n]))
             .collect();
+        let own = EffectValues::new(from.effect, &pairs);
         let mut p0 = from.params;
         p0.actuator.model = model;
         let accepted = accepted_before(from, &p0);
-        let effects: Vec<(Effect, &[f64])> = std::iter::once((from.effect, theta.as_slice()))
-            .chain(accepted.iter().map(|(e, t)| (*e, t.as_slice())))
+        let effects: Vec<EffectValues> = std::iter::once(own)
+            .chain(accepted.iter().cloned())
             .collect();
         let r = refine_output_error(
             self.c,
@@ -121,40 +118,40 @@ impl Diagnoser<'_> {
             &self.whitening,
             self.effort.polish_iterations(),
         )?;
-        let theta = from.effect.read(&r.params);
-        let split = SplitSigma::of(&r, from.effect, theta.len(), &accepted);
-        let mut polished = self.polished(from, &r, &theta, split, missed, hold);
+        let values = EffectValues::read(from.effect, &r.params);
+        let (cost, params) = (r.cost, r.params);
+        let split = SplitSigma::of(r, from.effect, &accepted);
+        let mut polished = self.polished(from, (cost, params), &values, split, missed, hold);
         polished.fewer_modes = from.fewer_modes.clone();
         Some(polished)
     }
 
-    /// The candidate of `from`'s effect at the refinement `r` (its parameters `theta`),
-    /// scored and summarised on the cells `missed`, with the refitted uncertainties of the
-    /// causes before it.
+    /// The candidate of `from`'s effect at the refinement of cost `cost` and model
+    /// `params` (its values `values`), scored and summarised on the cells `missed`, with
+    /// the refitted uncertainties of the causes before it.
     fn polished(
         &self,
         from: &Candidate,
-        r: &Refined,
-        theta: &[f64],
+        (cost, params): (f64, Params),
+        values: &EffectValues,
         split: SplitSigma,
         missed: &Missed,
         hold: &Hold,
     ) -> Candidate {
-        let sigma = polished_sigma(from, split.own_sigma);
-        let bounds = if split.own_bounds.0.is_empty() {
-            from.effect.bounds(&self.table)
-        } else {
-            split.own_bounds
+        let (own_sigma, bounds): (Option<EffectValues>, EffectBounds) = match split.own {
+            Some(own) => (Some(own.sigma), own.bounds),
+            None => (None, from.effect.bounds(&self.table)),
         };
+        let sigma = polished_sigma(from, own_sigma);
         let mut polished = scored_candidate(
             from.effect,
             self.c,
             Fitted {
-                theta,
-                sigma: &sigma,
+                values,
+                sigma: sigma.as_ref(),
                 bounds: &bounds,
-                fit_residual: r.cost.sqrt(),
-                params: r.params,
+                fit_residual: cost.sqrt(),
+                params,
             },
             &self.tests,
             &self.noise,

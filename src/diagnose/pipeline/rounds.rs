@@ -8,7 +8,8 @@ use crate::campaign::{Campaign, Record};
 use crate::diagnose::baseline::{force_recorded, mass_is_scale};
 use crate::diagnose::calibration::{SensorFinding, SensorNumber};
 use crate::diagnose::candidates::heldout_scores;
-use crate::diagnose::effect::{Effect, EFFECTS};
+use crate::diagnose::effect::Effect;
+use crate::diagnose::effect_values::EffectValues;
 use crate::diagnose::effort::Effort;
 use crate::diagnose::kinematics::KinematicCheck;
 use crate::diagnose::locate::{findings, unexplained_cells};
@@ -18,6 +19,7 @@ use crate::diagnose::part::Part;
 use crate::diagnose::residuals::{estimate_noise, simulate_test, Cells, Whitening};
 use crate::diagnose::visibility::{specimen_visibility, Visibility};
 use crate::diagnose::{trace_enabled, unphysical, Progress};
+use crate::effects::specimen;
 use crate::identify::spool::refine_servovalve;
 use crate::identify::Identification;
 use crate::params::{Params, Servovalve};
@@ -178,7 +180,7 @@ impl Diagnoser<'_> {
     /// records would have shown under the final model `extended` (step 7).
     fn unseen_specimen(&self, causes: &[Cause], extended: &Params) -> Option<Visibility> {
         (!force_recorded(self.c)
-            && self.testable.contains(&Effect::Specimen)
+            && self.testable.iter().any(|e| e.is(&specimen::EFFECT))
             && !causes.iter().any(|k| k.effect.specimen_modes().is_some()))
         .then(|| specimen_visibility(extended, self.c, &self.whitening))
         .flatten()
@@ -283,7 +285,7 @@ impl<'a> Diagnoser<'a> {
         }
         let noise = estimate_noise(c).with_unrecorded_lvdt(&base, c);
         let tests: Vec<usize> = (0..c.info.tests.len()).collect();
-        let (testable, not_testable): (Vec<_>, Vec<_>) = EFFECTS
+        let (testable, not_testable): (Vec<_>, Vec<_>) = Effect::search_order()
             .into_iter()
             .map(|e| (e, e.testable(c)))
             .partition(|(_, t)| t.is_ok());
@@ -427,14 +429,17 @@ impl<'a> Diagnoser<'a> {
             gain: before / best.report_residual,
         };
         let mut section4 = current.section4;
-        best.effect
-            .apply(&mut section4, &best.effect.read(&best.params));
+        EffectValues::read(best.effect, &best.params).apply(&mut section4);
         for cause in earlier.iter_mut() {
-            let theta = cause.effect.read(&best.params);
-            cause.effect.apply(&mut section4, &theta);
-            cause.parameters = cause.effect.keyed(&theta);
-            if let Some((_, sigma)) = best.refitted_sigma.iter().find(|(e, _)| *e == cause.effect) {
-                cause.sigma = cause.effect.sigma_map(sigma);
+            let values = EffectValues::read(cause.effect, &best.params);
+            values.apply(&mut section4);
+            cause.parameters = values.finite_map();
+            if let Some(sigma) = best
+                .refitted_sigma
+                .iter()
+                .find(|s| s.effect() == cause.effect)
+            {
+                cause.sigma = sigma.map();
             }
         }
         if mass_is_scale(self.c) {

@@ -7,7 +7,7 @@ use crate::diagnose::{Effect, EXPLAINED_RATIO, REQUIRED_GAIN};
 
 #[test]
 fn a_candidate_explains_the_data_up_to_the_explained_ratio() {
-    let mut c = Candidate::empty(Effect::Specimen);
+    let mut c = Candidate::empty(Effect::of(&crate::effects::specimen::EFFECT));
     c.select_residual = EXPLAINED_RATIO;
     assert!(explains(&c));
     c.select_residual = EXPLAINED_RATIO * 1.001;
@@ -25,12 +25,12 @@ fn the_best_candidate_is_the_best_that_is_evidence() {
     };
     let mut cands = vec![
         scored(
-            Effect::ValveDeadband,
+            Effect::of(&crate::effects::valve_deadband::EFFECT),
             1.0,
             Some("deadband at its lower bound"),
         ),
-        scored(Effect::Foundation, 2.0, None),
-        scored(Effect::Specimen, 3.0, None),
+        scored(Effect::of(&crate::effects::foundation::EFFECT), 2.0, None),
+        scored(Effect::of(&crate::effects::specimen::EFFECT), 3.0, None),
     ];
     assert_eq!(best_candidate(&cands, 4e4), Some(1));
     cands[1].not_evidence = Some("at a bound".into());
@@ -43,7 +43,7 @@ fn the_best_candidate_is_the_best_that_is_evidence() {
 /// by, physics and evidence; a candidate with the gain but no evidence is partial.
 #[test]
 fn the_verdict_needs_gain_physics_and_evidence() {
-    let mut c = Candidate::empty(Effect::ValveDeadband);
+    let mut c = Candidate::empty(Effect::of(&crate::effects::valve_deadband::EFFECT));
     c.score = 1.0;
     assert!(matches!(
         verdict(&c, REQUIRED_GAIN * 0.99, || 1.0, || None, 4e4),
@@ -113,7 +113,7 @@ fn the_rules_are_checked_in_their_order() {
 /// A score that is not a number (a run that stopped) gains nothing.
 #[test]
 fn the_gain_rule_fails_a_score_that_is_not_a_number() {
-    let c = Candidate::empty(Effect::ValveDeadband);
+    let c = Candidate::empty(Effect::of(&crate::effects::valve_deadband::EFFECT));
     assert!(matches!(
         verdict(&c, 10.0, || unreachable!(), || unreachable!(), 4e4),
         Verdict::NoGain
@@ -123,7 +123,7 @@ fn the_gain_rule_fails_a_score_that_is_not_a_number() {
 /// The chance rule says by which change of the table mass chance was measured.
 #[test]
 fn the_chance_rule_names_its_measurement() {
-    let mut c = Candidate::empty(Effect::ValveDeadband);
+    let mut c = Candidate::empty(Effect::of(&crate::effects::valve_deadband::EFFECT));
     c.score = 1.0;
     let Verdict::Partial(why) = verdict(&c, 1.3, || 2.0, || unreachable!(), 4e4) else {
         panic!("a gain below twice the bar is partial");
@@ -134,7 +134,7 @@ fn the_chance_rule_names_its_measurement() {
 /// An unphysical parameter makes the candidate partial before evidence and spread are read.
 #[test]
 fn the_physical_rule_comes_before_evidence_and_spread() {
-    let mut c = Candidate::empty(Effect::ValveDeadband);
+    let mut c = Candidate::empty(Effect::of(&crate::effects::valve_deadband::EFFECT));
     c.score = 1.0;
     c.parameters.insert("deadband".into(), f64::NAN);
     c.not_evidence = Some("at a bound".into());
@@ -147,7 +147,7 @@ fn the_physical_rule_comes_before_evidence_and_spread() {
 /// A candidate that is no evidence is partial with the reason, the spread not measured.
 #[test]
 fn the_evidence_rule_gives_its_reason() {
-    let mut c = Candidate::empty(Effect::ValveDeadband);
+    let mut c = Candidate::empty(Effect::of(&crate::effects::valve_deadband::EFFECT));
     c.score = 1.0;
     c.not_evidence = Some("at a bound".into());
     let v = verdict(&c, 10.0, || 1.0, || unreachable!(), 4e4);
@@ -157,7 +157,7 @@ fn the_evidence_rule_gives_its_reason() {
 /// A cause by every other rule is partial when its gain is credited to spread.
 #[test]
 fn the_spread_rule_comes_last() {
-    let mut c = Candidate::empty(Effect::ValveDeadband);
+    let mut c = Candidate::empty(Effect::of(&crate::effects::valve_deadband::EFFECT));
     c.score = 1.0;
     let v = verdict(&c, 10.0, || 1.0, || Some("coherent".into()), 4e4);
     assert!(matches!(v, Verdict::Partial(why) if why == "coherent"));
