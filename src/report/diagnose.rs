@@ -89,8 +89,10 @@ fn worst_time_figures(
         .baseline_rows
         .iter()
         .enumerate()
-        .flat_map(|(i, (_, r))| r.iter().filter_map(move |(ch, x)| Some((i, ch, (*x)?))))
-        .filter(|x| x.2.is_finite())
+        .flat_map(|(i, (_, r))| {
+            r.iter()
+                .filter_map(move |(ch, x)| Some((i, ch, x.finite()?)))
+        })
         .collect();
     worst.sort_by(|a, b| b.2.total_cmp(&a.2));
     let mut shown = Vec::new();
@@ -311,8 +313,8 @@ fn write_heat_map(html: &mut String, md: &mut String, d: &Diagnosis) {
         let _ = write!(html, "<tr><td>{}</td>", escape_html(name));
         let _ = write!(md, "| {} |", markdown_cell(name));
         for x in r.values() {
-            // absent channels and a diverged run's infinite cells alike
-            let shown = x.filter(|x| x.is_finite());
+            // absent channels and a diverged run's cells alike
+            let shown = x.finite();
             let text = shown.map_or_else(|| "-".into(), |x| format!("{x:.2}"));
             let _ = write!(html, "<td style=\"background:{}\">{text}</td>", heat(shown));
             let _ = write!(md, " {text} |");
