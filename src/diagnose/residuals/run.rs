@@ -7,7 +7,6 @@ use crate::params::Params;
 pub use crate::solver::Diverged;
 use crate::solver::{simulate_record_with, Checks, Simulated, DEFAULT_MAX_SUBSTEP_S};
 use crate::{Model, Outputs, SensorNoise};
-use std::borrow::Cow;
 
 /// A diagnosis run of one test: the readings at every sample, or where the solver
 /// stopped it ([`Diverged`]: it has no readings from the stop on, so whatever it is scored
@@ -19,15 +18,6 @@ pub fn readings(run: &TestRun) -> &[Outputs] {
     match run {
         Ok(v) => v,
         Err(d) => &d.outputs,
-    }
-}
-
-/// Every sample of `run`, NaN from a stop on (as the solver pads a run): for plots and
-/// figures read sample by sample over a whole run.
-pub fn padded(run: &TestRun) -> Cow<'_, [Outputs]> {
-    match run {
-        Ok(v) => Cow::Borrowed(v),
-        Err(_) => Cow::Owned(crate::solver::Run::from(run.clone()).outputs),
     }
 }
 
