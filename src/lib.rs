@@ -20,4 +20,4 @@ pub mod solver;
 
 pub use model::{Inputs, Model, Outputs, Reference, SensorNoise};
 pub use params::Params;
-pub use solver::{simulate_record, Simulator};
+pub use solver::{simulate_record, Diverged, Simulator};

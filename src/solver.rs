@@ -7,7 +7,9 @@ use crate::model::{Inputs, Model, Outputs, SensorNoise, State, NX};
 use std::collections::VecDeque;
 
 mod pair;
+mod record;
 pub use pair::simulate_run_pair;
+pub use record::*;
 
 /// Default largest sub-step: 1/3072 s, i.e. 6 sub-steps per 512 Hz sample. Halving it
 /// changes the outputs of the paper's random tests by about 5e-7 of their RMS (RK4,
@@ -506,153 +508,6 @@ fn rk4_stage_inputs<T: Copy>(at: &[T; 3], stage: Rk4Stage) -> T {
         Rk4Stage::Middle => at[1],
         Rk4Stage::End => at[2],
     }
-}
-
-/// A simulated record and, if the run had to stop, when and why.
-#[derive(Debug, Clone)]
-pub struct Run {
-    /// Noise-free readings at every sample; NaN from the stop on.
-    pub outputs: Vec<Outputs>,
-    /// The stop, if any: the time of the first NaN sample and [`Simulator::diverged`]'s
-    /// message.
-    pub stop: Option<Stop>,
-}
-
-/// Where and why a run stopped.
-#[derive(Debug, Clone, PartialEq)]
-pub struct Stop {
-    pub time_s: f64,
-    pub reason: String,
-}
-
-/// Simulate a sampled record: `inputs[k]` at `t_k = k / sample_rate`, optional sensor
-/// noise per sample (held over the sample interval, inside the loop). Returns the
-/// noise-free readings at every sample; `valve_command` is what the controller sent,
-/// i.e. computed on the noisy feedback. A run that leaves the envelope or diverges
-/// ([`Simulator::diverged`]) stops there: every later sample is NaN, so no caller takes
-/// it for a response ([`simulate_run`] also says why).
-pub fn simulate_record(
-    model: &Model,
-    inputs: &[Inputs],
-    sample_rate_hz: f64,
-    noise: Option<&[SensorNoise]>,
-    max_substep_s: f64,
-) -> Vec<Outputs> {
-    simulate_run(model, inputs, sample_rate_hz, noise, max_substep_s).outputs
-}
-
-/// [`simulate_record`] with the reason of a stop.
-pub fn simulate_run(
-    model: &Model,
-    inputs: &[Inputs],
-    sample_rate_hz: f64,
-    noise: Option<&[SensorNoise]>,
-    max_substep_s: f64,
-) -> Run {
-    simulate_run_with(
-        model,
-        inputs,
-        sample_rate_hz,
-        noise,
-        max_substep_s,
-        Checks::Envelope,
-    )
-}
-
-/// [`simulate_run`] stopping on `checks` only.
-pub fn simulate_run_with(
-    model: &Model,
-    inputs: &[Inputs],
-    sample_rate_hz: f64,
-    noise: Option<&[SensorNoise]>,
-    max_substep_s: f64,
-    checks: Checks,
-) -> Run {
-    let sim = Simulator::new(model.clone(), 0.0, max_substep_s);
-    run_observed(sim, inputs, sample_rate_hz, noise, checks, &|_| {})
-}
-
-/// Samples between two calls of a run's progress callback.
-pub const PROGRESS_EVERY_SAMPLES: usize = 1024;
-
-/// [`simulate_run`] that calls `progress(samples done)` every
-/// [`PROGRESS_EVERY_SAMPLES`] samples (a progress bar for long runs).
-pub fn simulate_run_observed(
-    model: &Model,
-    inputs: &[Inputs],
-    sample_rate_hz: f64,
-    max_substep_s: f64,
-    progress: &dyn Fn(usize),
-) -> Run {
-    let sim = Simulator::new(model.clone(), 0.0, max_substep_s);
-    run_observed(
-        sim,
-        inputs,
-        sample_rate_hz,
-        None,
-        Checks::Envelope,
-        progress,
-    )
-}
-
-fn run_observed(
-    mut sim: Simulator,
-    inputs: &[Inputs],
-    sample_rate_hz: f64,
-    noise: Option<&[SensorNoise]>,
-    checks: Checks,
-    progress: &dyn Fn(usize),
-) -> Run {
-    sim.checks = checks;
-    let dt = 1.0 / sample_rate_hz;
-    let zero = SensorNoise::default();
-    let mut out = Vec::with_capacity(inputs.len());
-    for k in 0..inputs.len() {
-        let nk = noise.map(|n| &n[k]).unwrap_or(&zero);
-        out.push(sim.outputs(&inputs[k], nk));
-        if k % PROGRESS_EVERY_SAMPLES == 0 {
-            progress(k);
-        }
-        if k + 1 < inputs.len() {
-            sim.advance(dt, &inputs[k], &inputs[k + 1], nk);
-            // keep sample times exact (no drift from repeated addition)
-            sim.time_s = (k + 1) as f64 * dt;
-            if let Some(reason) = sim.diverged() {
-                out.resize(inputs.len(), DIVERGED);
-                let stop = Stop {
-                    time_s: sim.time_s,
-                    reason,
-                };
-                return Run {
-                    outputs: out,
-                    stop: Some(stop),
-                };
-            }
-        }
-    }
-    Run {
-        outputs: out,
-        stop: None,
-    }
-}
-
-/// What [`simulate_record`] writes for the samples after a divergence.
-pub const DIVERGED: Outputs = Outputs {
-    valve_command: f64::NAN,
-    spool_position: f64::NAN,
-    displacement_m: f64::NAN,
-    velocity_m_s: f64::NAN,
-    acceleration_m_s2: f64::NAN,
-    actuator_force_n: f64::NAN,
-    pressure_a_pa: f64::NAN,
-    pressure_b_pa: f64::NAN,
-};
-
-/// The time of the first sample [`simulate_record`] marked as diverged, if any.
-pub fn first_divergence(out: &[Outputs], sample_rate_hz: f64) -> Option<f64> {
-    out.iter()
-        .position(|o| o.displacement_m.is_nan())
-        .map(|k| k as f64 / sample_rate_hz)
 }
 
 #[cfg(test)]

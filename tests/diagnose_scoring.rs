@@ -5,7 +5,7 @@
 //! follow sample by sample, scores better than the baseline under the predictive score.
 
 use shaketable::campaign::synth::{synthesise, NoiseLevels, SynthOptions};
-use shaketable::diagnose::residuals::test_scores_in_envelope;
+use shaketable::diagnose::residuals::{test_scores_in_envelope, Cell};
 use shaketable::diagnose::{estimate_noise, predict, ratios, scores, Part};
 use shaketable::Params;
 
@@ -41,7 +41,7 @@ fn heldout(p: &Params, c: &shaketable::campaign::Campaign, measure: Measure) -> 
             Measure::Score => cells().score,
             Measure::Standardised => cells().residual,
         };
-        v.extend(row.values().copied().flatten().filter(|x| x.is_finite()));
+        v.extend(row.values().filter_map(|x| x.finite()));
     }
     (v.iter().map(|x| x * x).sum::<f64>() / v.len() as f64).sqrt()
 }
@@ -148,7 +148,7 @@ fn a_trial_model_outside_the_envelope_scores_infinitely_bad() {
     let s3 = c.info.tests.iter().position(|t| t.name == "S3").unwrap();
     let r2 = c.info.tests.iter().position(|t| t.name == "R2").unwrap();
     let inside = test_scores_in_envelope(&p, &c, s3, Part::HeldOut, &noise);
-    let finite = |x: &Option<f64>| x.is_some_and(f64::is_finite);
+    let finite = |x: &Cell| x.finite().is_some();
     assert!(inside.score.values().any(finite), "{inside:?}");
     let mut narrow = p;
     narrow.limits.stroke_m = 0.02;
@@ -160,10 +160,10 @@ fn a_trial_model_outside_the_envelope_scores_infinitely_bad() {
     lvdt.iter_mut().for_each(|x| *x *= 0.3);
     let outside = test_scores_in_envelope(&narrow, &c, s3, Part::HeldOut, &noise);
     assert!(
-        outside.score.values().all(|x| *x == Some(f64::INFINITY)),
+        outside.score.values().all(|x| *x == Cell::Diverged),
         "{outside:?}"
     );
-    assert!(outside.residual.values().all(|x| *x == Some(f64::INFINITY)));
+    assert!(outside.residual.values().all(|x| *x == Cell::Diverged));
     // R2 (0.1 g random, millimetres of stroke) stays inside even the narrow envelope
     let r2_narrow = test_scores_in_envelope(&narrow, &c, r2, Part::HeldOut, &noise);
     assert!(r2_narrow.score.values().any(finite), "{r2_narrow:?}");

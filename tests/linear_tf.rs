@@ -154,7 +154,8 @@ fn welch_table_tf(p: &Params) -> (Vec<f64>, Vec<num_complex::Complex64>) {
         FS,
         None,
         DEFAULT_MAX_SUBSTEP_S,
-    );
+    )
+    .expect("the run stays in the envelope");
     let acc: Vec<f64> = out.iter().map(|o| o.acceleration_m_s2).collect();
     let w = Welch::new(FS, WelchOptions::for_resolution(FS, 0.125)).unwrap();
     let e = w.frf(&r.acceleration_m_s2, &acc).unwrap();

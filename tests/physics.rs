@@ -11,8 +11,10 @@ use shaketable::params::ActuatorModel;
 use shaketable::solver::DEFAULT_MAX_SUBSTEP_S;
 use shaketable::{simulate_record, Model, Outputs, Params, Simulator};
 
+/// The run of `p` on `inputs`: every physics test's run stays in the envelope.
 fn run(p: &Params, inputs: &[Inputs]) -> Vec<Outputs> {
     simulate_record(&Model::new(p), inputs, FS, None, DEFAULT_MAX_SUBSTEP_S)
+        .unwrap_or_else(|stop| panic!("{stop}"))
 }
 
 fn max_abs(x: impl Iterator<Item = f64>) -> f64 {

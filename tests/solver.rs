@@ -14,8 +14,8 @@ fn runs_are_bit_identical() {
     p.stick_slip.enabled = true;
     let m = Model::new(&p);
     let r = sine(0.05, 1.0, 5.0);
-    let a = simulate_record(&m, &r, FS, None, DEFAULT_MAX_SUBSTEP_S);
-    let b = simulate_record(&m, &r, FS, None, DEFAULT_MAX_SUBSTEP_S);
+    let a = simulate_record(&m, &r, FS, None, DEFAULT_MAX_SUBSTEP_S).unwrap();
+    let b = simulate_record(&m, &r, FS, None, DEFAULT_MAX_SUBSTEP_S).unwrap();
     assert!(a.iter().zip(&b).all(|(x, y)| x.actuator_force_n.to_bits()
         == y.actuator_force_n.to_bits()
         && x.displacement_m.to_bits() == y.displacement_m.to_bits()));
@@ -52,7 +52,7 @@ fn delay_valve_spool_is_the_delayed_command() {
     p.servovalve.time_constant_s = 4.0 / FS;
     p.servovalve.gain = 0.9;
     let m = Model::new(&p);
-    let out = simulate_record(&m, &sine(0.02, 3.0, 2.0), FS, None, DEFAULT_MAX_SUBSTEP_S);
+    let out = simulate_record(&m, &sine(0.02, 3.0, 2.0), FS, None, DEFAULT_MAX_SUBSTEP_S).unwrap();
     let scale = out
         .iter()
         .map(|o| o.valve_command.abs())
@@ -96,8 +96,8 @@ fn halving_the_substep_changes_outputs_by_less_than_1e_6_of_rms() {
         let inputs = common::inputs_of(&r);
         for (name, params) in shaketable::benchmark::models() {
             let m = Model::new(&params);
-            let a = simulate_record(&m, &inputs, FS, None, DEFAULT_MAX_SUBSTEP_S);
-            let b = simulate_record(&m, &inputs, FS, None, DEFAULT_MAX_SUBSTEP_S / 2.0);
+            let a = simulate_record(&m, &inputs, FS, None, DEFAULT_MAX_SUBSTEP_S).unwrap();
+            let b = simulate_record(&m, &inputs, FS, None, DEFAULT_MAX_SUBSTEP_S / 2.0).unwrap();
             let channels: [(&str, fn(&shaketable::Outputs) -> f64); 6] = [
                 ("valve_command", |o| o.valve_command),
                 ("spool_position", |o| o.spool_position),
@@ -129,9 +129,8 @@ fn a_valve_faster_than_the_sub_step_is_integrated_stably() {
     let mut q = Params::trees_lab();
     q.servovalve.natural_frequency_hz = 1000.0;
     let r = sine(0.01, 1.0, 5.0);
-    let out = simulate_record(&Model::new(&q), &r, FS, None, 1.0 / FS);
-    assert_eq!(shaketable::solver::first_divergence(&out, FS), None);
-    let fine = simulate_record(&Model::new(&q), &r, FS, None, 1.0 / FS / 30.0);
+    let out = simulate_record(&Model::new(&q), &r, FS, None, 1.0 / FS).expect("no stop");
+    let fine = simulate_record(&Model::new(&q), &r, FS, None, 1.0 / FS / 30.0).unwrap();
     let x: Vec<f64> = out.iter().map(|o| o.displacement_m).collect();
     let y: Vec<f64> = fine.iter().map(|o| o.displacement_m).collect();
     let change = relative_rms_change(&x, &y);
@@ -142,25 +141,31 @@ fn a_valve_faster_than_the_sub_step_is_integrated_stably() {
 }
 
 /// An unstable loop (a displacement gain 300 times the TREES Lab table's) is stopped when
-/// the table outruns ten times its valve's full-opening speed: the later samples are NaN
-/// and `first_divergence` says when, rather than the Bouc-Wen guard refining sub-steps of
-/// a meaningless state for minutes.
+/// the table outruns ten times its valve's full-opening speed: the run returns
+/// [`shaketable::Diverged`], saying when, with the finite readings before, rather than the
+/// Bouc-Wen guard refining sub-steps of a meaningless state for minutes.
 #[test]
 fn an_unstable_run_is_stopped_and_marked() {
     let p = Params::trees_lab();
     let r = sine(0.01, 1.0, 5.0);
     let stable = simulate_record(&Model::new(&p), &r, FS, None, DEFAULT_MAX_SUBSTEP_S);
-    assert_eq!(shaketable::solver::first_divergence(&stable, FS), None);
+    assert!(stable.is_ok(), "{:?}", stable.err());
     let mut q = p;
     q.controller.kp *= 300.0;
     assert!(!shaketable::linear::Linearisation::new(&q)
         .unstable_poles()
         .unwrap()
         .is_empty());
-    let out = simulate_record(&Model::new(&q), &r, FS, None, DEFAULT_MAX_SUBSTEP_S);
-    let t = shaketable::solver::first_divergence(&out, FS).expect("the loop diverges");
+    let stop = simulate_record(&Model::new(&q), &r, FS, None, DEFAULT_MAX_SUBSTEP_S)
+        .expect_err("the loop diverges");
+    let t = stop.time_s;
     assert!(t > 0.0 && t < 5.0, "diverged at {t} s");
     let k = (t * FS).round() as usize;
-    assert!(out[..k].iter().all(|o| o.displacement_m.is_finite()));
-    assert!(out[k..].iter().all(|o| o.actuator_force_n.is_nan()));
+    assert_eq!((stop.sample(), stop.samples), (k, r.len()));
+    assert!(
+        stop.reason.contains(&format!("t = {t} s")),
+        "{}",
+        stop.reason
+    );
+    assert!(stop.outputs.iter().all(|o| o.displacement_m.is_finite()));
 }

@@ -8,7 +8,9 @@
 use super::calibration::{removed_by, sensor_findings, RemovedBy, SensorFinding};
 use super::output::{PartRows, UnexplainedCell};
 use super::part::Part;
-use super::residuals::{channel_bands, padded, predict, Channel, NoiseFloor, PerChannel};
+use super::residuals::{
+    channel_bands, predict, readings, CellBands, Channel, NoiseFloor, PerChannel,
+};
 use super::EXPLAINED_RATIO;
 use crate::campaign::Campaign;
 use crate::params::Params;
@@ -62,7 +64,7 @@ pub(super) fn unexplained_cells(
         .enumerate()
         .flat_map(|(i, (r, m))| {
             r.iter().filter_map(move |(ch, x)| {
-                let x = (*x)?;
+                let x = x.figure()?;
                 (m[ch] && !(x <= EXPLAINED_RATIO)).then_some((i, ch, x))
             })
         })
@@ -98,33 +100,38 @@ fn locate(
 ) -> Option<UnexplainedCell> {
     let pred = predict(p, c, i, Part::Whole, noise);
     let r = &c.records[i];
-    let bands = channel_bands(c, i, &pred, noise, Part::Report, ch)?;
-    let worst = bands.iter().max_by(|a, b| a.ratio.total_cmp(&b.ratio));
+    let worst = match channel_bands(c, i, &pred, noise, Part::Report, ch) {
+        CellBands::Absent => return None,
+        // a diverged run has no band to name
+        CellBands::Diverged => None,
+        CellBands::Scored(bands) => bands.into_iter().max_by(|a, b| a.ratio.total_cmp(&b.ratio)),
+    };
     let (band_hz, band_residual) = match worst {
         Some(b) => ([b.band_hz.0, b.band_hz.1], b.ratio.sqrt()),
-        // a diverged run has no band to name
         None => ([0.0, c.sample_rate_of(i) / 2.0], f64::INFINITY),
     };
     let range = Part::Report.range(r.len());
     let m = ch.measured(r)?;
     let s = noise.of(ch)?;
-    // every sample, NaN from a stop on (the figures are read sample by sample)
-    let locked = padded(&pred.locked);
-    let run = &locked[range.clone()];
+    let run = PartRun::of(readings(&pred.locked), range.clone());
     let residual_units: Vec<f64> = range
         .clone()
-        .map(|k| (m[k] - ch.simulated(&locked[k])) / s)
+        .zip(run.readings)
+        .map(|(k, o)| (m[k] - ch.simulated(o)) / s)
         .collect();
     let depends_on = Dependence {
-        moving_positive: split(&residual_units, run, |o| o.velocity_m_s > 0.0),
-        large_displacement: split_at_half(&residual_units, run, |o| o.displacement_m.abs()),
-        fast_motion: split_at_half(&residual_units, run, |o| o.velocity_m_s.abs()),
-        high_load_pressure: split_at_half(&residual_units, run, |o| {
+        moving_positive: split(&residual_units, &run, |o| o.velocity_m_s > 0.0),
+        large_displacement: split_at_half(&residual_units, &run, |o| o.displacement_m.abs()),
+        fast_motion: split_at_half(&residual_units, &run, |o| o.velocity_m_s.abs()),
+        high_load_pressure: split_at_half(&residual_units, &run, |o| {
             (o.pressure_a_pa - o.pressure_b_pa).abs()
         }),
     };
-    let simulated: Vec<f64> = run.iter().map(|o| ch.simulated(o)).collect();
-    let removed_by = removed_by(&m[range], &simulated, c.sample_rate_of(i), s);
+    // a run that stopped inside the part leaves no whole residual to correct
+    let removed_by = (run.missing == 0).then(|| {
+        let simulated: Vec<f64> = run.readings.iter().map(|o| ch.simulated(o)).collect();
+        removed_by(&m[range], &simulated, c.sample_rate_of(i), s)
+    });
     Some(UnexplainedCell {
         test: c.info.tests[i].name.clone(),
         channel: ch.name().to_string(),
@@ -132,23 +139,46 @@ fn locate(
         residual,
         band_residual,
         depends_on,
-        removed_by,
+        removed_by: removed_by.flatten(),
     })
 }
 
-/// [`split`] at half the largest value of `of` over the run.
-fn split_at_half(residual: &[f64], run: &[Outputs], of: impl Fn(&Outputs) -> f64) -> Split {
-    let largest = run.iter().map(&of).fold(0.0, f64::max);
+/// The model's run over a part of a test: the part's samples it has readings for, and how
+/// many later ones it has none for (it stopped inside the part).
+struct PartRun<'a> {
+    readings: &'a [Outputs],
+    missing: usize,
+}
+
+impl<'a> PartRun<'a> {
+    /// The readings of `run` (those before a stop) over `range`.
+    fn of(run: &'a [Outputs], range: std::ops::Range<usize>) -> Self {
+        let end = range.end.min(run.len()).max(range.start);
+        PartRun {
+            readings: run.get(range.start..end).unwrap_or(&[]),
+            missing: range.end - end,
+        }
+    }
+}
+
+/// [`split`] at half the largest value of `of` over the run's readings.
+fn split_at_half(residual: &[f64], run: &PartRun, of: impl Fn(&Outputs) -> f64) -> Split {
+    let largest = run.readings.iter().map(&of).fold(0.0, f64::max);
     split(residual, run, |o| of(o) > 0.5 * largest)
 }
 
-/// RMS of `residual` where `when` holds on the model's run, and where it does not.
-fn split(residual: &[f64], run: &[Outputs], when: impl Fn(&Outputs) -> bool) -> Split {
+/// RMS of `residual` where `when` holds on the model's run, and where it does not. The
+/// samples after a stop have no reading, so no condition holds there: they fall on the
+/// `otherwise` side, which then has no RMS (NaN, [`MISSING_RESIDUAL`]).
+fn split(residual: &[f64], run: &PartRun, when: impl Fn(&Outputs) -> bool) -> Split {
     let (mut on, mut off) = ((0.0, 0usize), (0.0, 0usize));
-    for (x, o) in residual.iter().zip(run) {
+    for (x, o) in residual.iter().zip(run.readings) {
         let side = if when(o) { &mut on } else { &mut off };
         side.0 += x * x;
         side.1 += 1;
+    }
+    if run.missing > 0 {
+        off = (MISSING_RESIDUAL, off.1 + run.missing);
     }
     let rms = |(sum, n): (f64, usize)| (n >= MIN_SPLIT_SAMPLES).then(|| (sum / n as f64).sqrt());
     Split {
@@ -156,6 +186,10 @@ fn split(residual: &[f64], run: &[Outputs], when: impl Fn(&Outputs) -> bool) -> 
         otherwise: rms(off),
     }
 }
+
+/// The sum of squares of a side holding samples without a reading: not a number (the
+/// report prints it as NaN, the JSON as null).
+const MISSING_RESIDUAL: f64 = f64::NAN;
 
 #[cfg(test)]
 mod tests {
@@ -188,11 +222,19 @@ mod tests {
             .iter()
             .map(|o| if o.velocity_m_s > 0.0 { 3.0 } else { 0.0 })
             .collect();
-        let s = split(&residual, &run, |o| o.velocity_m_s > 0.0);
+        let whole = PartRun::of(&run, 0..n);
+        let s = split(&residual, &whole, |o| o.velocity_m_s > 0.0);
         assert_eq!(s.when, Some(3.0));
         assert_eq!(s.otherwise, Some(0.0));
         // too few samples on a side: no figure
-        let s = split(&residual[..60], &run[..60], |o| o.velocity_m_s > 0.0);
+        let s = split(&residual[..60], &PartRun::of(&run, 0..60), |o| {
+            o.velocity_m_s > 0.0
+        });
         assert!(s.otherwise.is_none());
+        // a run that stopped at sample 300: the side without readings has no RMS
+        let stopped = PartRun::of(&run[..300], 100..n);
+        assert_eq!((stopped.readings.len(), stopped.missing), (200, 100));
+        let s = split(&residual[100..300], &stopped, |o| o.velocity_m_s > 0.0);
+        assert!(s.when.is_some_and(|x| x == 3.0) && s.otherwise.is_some_and(f64::is_nan));
     }
 }

@@ -17,7 +17,7 @@ impl Missed {
     pub fn of(residual_rows: &[Cells]) -> Missed {
         let cells: Vec<PerChannel<bool>> = residual_rows
             .iter()
-            .map(|r| r.map(|x| x.is_some_and(|x| x > MISS_RATIO)))
+            .map(|r| r.map(|x| x.figure().is_some_and(|x| x > MISS_RATIO)))
             .collect();
         let any = cells.iter().any(|m| m.values().any(|&m| m));
         Missed { cells, any }
@@ -32,7 +32,7 @@ impl Missed {
                 r.values()
                     .zip(m.values())
                     .filter(|(_, &m)| m || !self.any)
-                    .filter_map(|(x, _)| *x)
+                    .filter_map(|(x, _)| x.figure())
             })
             // absent channels and NaN figures do not count; a diverged run's cells are
             // infinite and count
@@ -49,7 +49,7 @@ impl Missed {
         rows.iter().zip(&self.cells).all(|(r, m)| {
             r.values()
                 .zip(m.values())
-                .all(|(x, &m)| !m || x.is_some_and(|x| x <= EXPLAINED_RATIO))
+                .all(|(x, &m)| !m || x.figure().is_some_and(|x| x <= EXPLAINED_RATIO))
         })
     }
 }
@@ -57,14 +57,21 @@ impl Missed {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::diagnose::residuals::Cell;
 
     /// An absent channel in [`rows`].
     const NAN: f64 = f64::NAN;
 
-    /// Rows of cells in channel order, NaN marking an absent channel.
+    /// Rows of cells in channel order, NaN marking an absent channel and infinity a
+    /// diverged run.
     fn rows<const N: usize>(r: [[f64; 5]; N]) -> Vec<Cells> {
+        let cell = |x: f64| match x {
+            x if x.is_nan() => Cell::Absent,
+            f64::INFINITY => Cell::Diverged,
+            x => Cell::Scored(x),
+        };
         r.into_iter()
-            .map(|row| Cells::from(row.map(|x| (!x.is_nan()).then_some(x))))
+            .map(|row| Cells::from(row.map(cell)))
             .collect()
     }
 

@@ -81,7 +81,7 @@ pub use output::{Candidate, Cause, Diagnosis, PartRows, Partial, UnexplainedCell
 pub use part::Part;
 
 pub use residuals::{
-    estimate_noise, padded, predict, ratios, scores, simulate_test, CellScores, Cells, Channel,
+    estimate_noise, predict, ratios, readings, scores, simulate_test, CellScores, Cells, Channel,
     Diverged, NoiseFloor, PerChannel, TestRun, Whitening, SCORE_WINDOW,
 };
 

@@ -14,7 +14,7 @@
 //! Analysis and Measurement Procedures*, 4th ed., Wiley 2010, section 9.2, Table 9.6);
 //! the normal approximation holds for `eps` below about 0.2 and widens honestly beyond.
 
-use super::residuals::{padded, simulate_test, Channel, TestRun, FIT_MAX_HZ};
+use super::residuals::{simulate_test, Channel, TestRun, FIT_MAX_HZ};
 use super::{Diagnosis, Part};
 use crate::campaign::{Campaign, Control, Record};
 use crate::identify::frf::{FrfError, Welch, WelchOptions};
@@ -136,15 +136,16 @@ pub fn model_error_response(
         test: test.clone(),
         channel: ch.name(),
     })?;
-    let run = simulate_test(p, c, i, Part::Whole);
-    if let Err(d) = &run {
-        return Err(NoResponse::Diverged {
-            test,
-            time_s: d.time_s,
-            reason: d.reason.clone(),
-        });
-    }
-    let simulated = padded(&run);
+    let simulated = match simulate_test(p, c, i, Part::Whole) {
+        Ok(simulated) => simulated,
+        Err(d) => {
+            return Err(NoResponse::Diverged {
+                test,
+                time_s: d.time_s,
+                reason: d.reason,
+            })
+        }
+    };
     let residual: Vec<f64> = measured
         .iter()
         .zip(simulated.iter())
@@ -330,8 +331,7 @@ pub fn coherent_power(
     let (spec, r) = (c.info.tests.get(i)?, c.records.get(i)?);
     let measured = ch.measured(r)?;
     let range = part.range(r.len());
-    run.as_ref().ok()?;
-    let simulated = padded(run);
+    let simulated = run.as_ref().ok()?;
     let residual: Vec<f64> = measured[range.clone()]
         .iter()
         .zip(&simulated[range.clone()])

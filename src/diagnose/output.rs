@@ -461,7 +461,7 @@ fn split_json() -> serde_json::Value {
 fn cells_json(r: &Cells) -> serde_json::Value {
     serde_json::Value::Object(
         r.iter()
-            .filter_map(|(ch, v)| v.filter(|v| v.is_finite()).map(|v| (ch, v)))
+            .filter_map(|(ch, v)| v.finite().map(|v| (ch, v)))
             .map(|(ch, v)| (ch.name().to_string(), serde_json::json!(v)))
             .collect(),
     )

@@ -1,7 +1,7 @@
 //! Validation of the identified model on the table transfer function (paper section 5).
 
 use super::error::IdentifyError;
-use super::frf::FrfEstimate;
+use super::frf::{FrfError, FrfEstimate};
 use super::results::{FrfData, Validation};
 use super::servovalve::relative_error;
 use super::signals::welch_for;
@@ -9,7 +9,7 @@ use super::VALIDATION_BAND_HZ;
 use crate::campaign::{Campaign, Record};
 use crate::linear::{Linearisation, TfFigures};
 use crate::params::{ActuatorModel, Params};
-use crate::solver::{simulate_record, DEFAULT_MAX_SUBSTEP_S};
+use crate::solver::{simulate_record, Simulated, DEFAULT_MAX_SUBSTEP_S};
 use crate::Model;
 use num_complex::Complex64;
 
@@ -49,8 +49,8 @@ pub fn validate(c: &Campaign, name: &str, params: &Params) -> Result<Validation,
         None,
         DEFAULT_MAX_SUBSTEP_S,
     );
-    let acc: Vec<f64> = sim.iter().map(|o| o.acceleration_m_s2).collect();
     let w = welch_for(fs, rec.len()).map_err(IdentifyError::not_usable)?;
+    let acc = simulated_acceleration(sim)?;
     let simf = w
         .frf(&rec.ref_acceleration_m_s2, &acc)
         .map_err(IdentifyError::not_usable)?;
@@ -78,4 +78,19 @@ pub fn validate(c: &Campaign, name: &str, params: &Params) -> Result<Validation,
         ideal: FrfData::from(&f, &ideal, &ones, [0.0, f64::MAX]),
         nonlinear: FrfData::from(&f, &nonlinear, &ones, [0.0, f64::MAX]),
     })
+}
+
+/// The table acceleration of the nonlinear model's run. A run that stopped has no table
+/// TF: the validation is not usable, with the error the Welch estimate gives at the first
+/// sample without a reading (the same text as when the stop was read as NaN samples).
+fn simulated_acceleration(sim: Simulated) -> Result<Vec<f64>, IdentifyError> {
+    match sim {
+        Ok(out) => Ok(out.iter().map(|o| o.acceleration_m_s2).collect()),
+        Err(stop) => {
+            let before = stop.outputs.iter().map(|o| o.acceleration_m_s2);
+            let first = before.clone().position(|a| !a.is_finite());
+            let sample = first.unwrap_or(stop.sample());
+            Err(IdentifyError::not_usable(FrfError::NonFinite(sample)))
+        }
+    }
 }

@@ -4,12 +4,13 @@
 //! worst cells it is in, and before/after overlays of the worst tests and of the table TF.
 
 use crate::campaign::Campaign;
-use crate::diagnose::{padded, simulate_test, CellResponse, Channel, Diagnosis, Part};
+use crate::diagnose::{readings, simulate_test, CellResponse, Channel, Diagnosis, Part};
 use crate::identify::frf::{FrfEstimate, Welch, WelchOptions};
 use crate::report::page::{html_table, markdown_cell, markdown_table, Table};
 use crate::report::plot::{bode_png, xy_png, BodeCurve, Series};
 use crate::report::{escape_html, markdown_code, safe_file_name};
 use std::fmt::Write as _;
+use std::ops::Range;
 use std::path::Path;
 
 /// Background colour of a residual ratio: white at the noise floor, red above 5x, grey
@@ -89,8 +90,10 @@ fn worst_time_figures(
         .baseline_rows
         .iter()
         .enumerate()
-        .flat_map(|(i, (_, r))| r.iter().filter_map(move |(ch, x)| Some((i, ch, (*x)?))))
-        .filter(|x| x.2.is_finite())
+        .flat_map(|(i, (_, r))| {
+            r.iter()
+                .filter_map(move |(ch, x)| Some((i, ch, x.finite()?)))
+        })
         .collect();
     worst.sort_by(|a, b| b.2.total_cmp(&a.2));
     let mut shown = Vec::new();
@@ -118,16 +121,16 @@ fn time_figure(
         simulate_test(&d.baseline, c, i, Part::Whole),
         simulate_test(&d.extended, c, i, Part::Whole),
     );
-    // every sample, NaN from a stop on (the plot leaves a gap there)
-    let (base, ext) = (padded(&base), padded(&ext));
+    let (base, ext) = (readings(&base), readings(&ext));
     let Some(m) = ch.measured(r) else {
         return Ok(None);
     };
-    let (lo, hi) = worst_window(m, &base, ch, c.sample_rate_of(i));
+    let (lo, hi) = worst_window(m, base, ch, c.sample_rate_of(i));
     let t: Vec<f64> = r.time_s[lo..hi].to_vec();
     let meas: Vec<f64> = m[lo..hi].to_vec();
-    let b: Vec<f64> = base[lo..hi].iter().map(|o| ch.simulated(o)).collect();
-    let e: Vec<f64> = ext[lo..hi].iter().map(|o| ch.simulated(o)).collect();
+    // a run that stopped inside the window is drawn up to its stop
+    let b = simulated_over(base, ch, lo..hi);
+    let e = simulated_over(ext, ch, lo..hi);
     let name = &c.info.tests[i].name;
     let file = safe_file_name(&format!("time_{name}_{}.png", ch.name()));
     let ext_label = format!("extended ({cause})");
@@ -148,13 +151,13 @@ fn time_figure(
             },
             Series {
                 label: "baseline",
-                x: &t,
+                x: &t[..b.len()],
                 y: &b,
                 points: false,
             },
             Series {
                 label: &ext_label,
-                x: &t,
+                x: &t[..e.len()],
                 y: &e,
                 points: false,
             },
@@ -166,21 +169,33 @@ fn time_figure(
     )))
 }
 
+/// Channel `ch` of a run's readings over `range`, up to its stop if it stopped inside.
+fn simulated_over(run: &[crate::Outputs], ch: Channel, range: Range<usize>) -> Vec<f64> {
+    let readings = run.iter().skip(range.start).take(range.len());
+    readings.map(|o| ch.simulated(o)).collect()
+}
+
 /// The samples `lo..hi` of a 1.5 s window (at `sample_rate_hz`) around the largest
-/// residual of the baseline's run `base` against the measured channel `m`.
+/// residual of the baseline's run `base` (its readings) against the measured channel `m`.
+/// A run that stopped before the record's end has no bound on its residual after the
+/// stop: the window is the record's end.
 fn worst_window(
     m: &[f64],
     base: &[crate::Outputs],
     ch: Channel,
     sample_rate_hz: f64,
 ) -> (usize, usize) {
-    let k = (0..m.len())
-        .max_by(|&a, &b| {
-            (m[a] - ch.simulated(&base[a]))
-                .abs()
-                .total_cmp(&(m[b] - ch.simulated(&base[b])).abs())
-        })
-        .unwrap_or(0);
+    let k = if base.len() < m.len() {
+        m.len() - 1
+    } else {
+        (0..m.len())
+            .max_by(|&a, &b| {
+                (m[a] - ch.simulated(&base[a]))
+                    .abs()
+                    .total_cmp(&(m[b] - ch.simulated(&base[b])).abs())
+            })
+            .unwrap_or(0)
+    };
     let half = (0.75 * sample_rate_hz) as usize;
     (k.saturating_sub(half), (k + half).min(m.len()))
 }
@@ -245,13 +260,15 @@ fn table_tfs(c: &Campaign, d: &Diagnosis, i: usize) -> Option<[FrfEstimate; 3]> 
     )
     .ok()?;
     let est = |acc: &[f64]| w.frf(&r.ref_acceleration_m_s2, acc).ok();
-    let acceleration = |p| -> Vec<f64> {
-        let run = simulate_test(p, c, i, Part::Whole);
-        padded(&run).iter().map(|o| o.acceleration_m_s2).collect()
+    // a run that stopped has no table TF
+    let acceleration = |p| -> Option<Vec<f64>> {
+        let run = simulate_test(p, c, i, Part::Whole).ok()?;
+        Some(run.iter().map(|o| o.acceleration_m_s2).collect())
     };
     let (base, ext) = (acceleration(&d.baseline), acceleration(&d.extended));
     let measured = r.acceleration_m_s2.as_deref().and_then(est);
-    let (Some(m), Some(b), Some(e)) = (measured, est(&base), est(&ext)) else {
+    let (base, ext) = (base.as_deref().and_then(est), ext.as_deref().and_then(est));
+    let (Some(m), Some(b), Some(e)) = (measured, base, ext) else {
         return None;
     };
     Some([m, b, e])
@@ -311,8 +328,8 @@ fn write_heat_map(html: &mut String, md: &mut String, d: &Diagnosis) {
         let _ = write!(html, "<tr><td>{}</td>", escape_html(name));
         let _ = write!(md, "| {} |", markdown_cell(name));
         for x in r.values() {
-            // absent channels and a diverged run's infinite cells alike
-            let shown = x.filter(|x| x.is_finite());
+            // absent channels and a diverged run's cells alike
+            let shown = x.finite();
             let text = shown.map_or_else(|| "-".into(), |x| format!("{x:.2}"));
             let _ = write!(html, "<td style=\"background:{}\">{text}</td>", heat(shown));
             let _ = write!(md, " {text} |");

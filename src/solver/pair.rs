@@ -7,7 +7,7 @@
 //! advances alone.
 
 use super::Rk4Stage;
-use super::{rk4_stage_inputs, Checks, Run, Simulator, Stop, DIVERGED, NX};
+use super::{rk4_stage_inputs, Checks, Diverged, Run, Simulator, Stop, NX};
 use crate::model::{Inputs, Model, Outputs, SensorNoise, State, CORE_STATES};
 
 impl Simulator {
@@ -140,11 +140,10 @@ impl<'a> Lane<'a> {
     }
 
     /// After the advance past sample `k`: exact sample time, and the stop when the run
-    /// diverged (every later sample NaN), as [`super::run_observed`] does.
+    /// diverged (no later sample read), as [`super::simulate_record_with`] does.
     fn settle(&mut self, k: usize, dt_s: f64) {
         self.sim.time_s = (k + 1) as f64 * dt_s;
         if let Some(reason) = self.sim.diverged() {
-            self.out.resize(self.inputs.len(), DIVERGED);
             self.stop = Some(Stop {
                 time_s: self.sim.time_s,
                 reason,
@@ -152,11 +151,19 @@ impl<'a> Lane<'a> {
         }
     }
 
+    /// The run padded to every sample ([`Run`]), as [`super::simulate_run_with`] gives it.
     fn run(self) -> Run {
-        Run {
-            outputs: self.out,
-            stop: self.stop,
+        let samples = self.inputs.len();
+        match self.stop {
+            None => Ok(self.out),
+            Some(Stop { time_s, reason }) => Err(Diverged {
+                time_s,
+                reason,
+                outputs: self.out,
+                samples,
+            }),
         }
+        .into()
     }
 }
 

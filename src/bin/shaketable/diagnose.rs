@@ -110,8 +110,8 @@ pub fn run(args: Args) -> anyhow::Result<()> {
     for (name, r) in &d.baseline_rows {
         let cells: Vec<String> = r
             .values()
-            .map(|v| match v {
-                Some(v) if v.is_finite() => format!("{v:8.2}"),
+            .map(|v| match v.finite() {
+                Some(v) => format!("{v:8.2}"),
                 _ => "       -".into(),
             })
             .collect();

@@ -240,7 +240,7 @@ impl Diagnoser<'_> {
 fn unscorable(base: &Params, c: &Campaign, select: &[Cells]) -> Option<String> {
     let scored = select
         .iter()
-        .any(|cells| cells.values().any(|x| x.is_some_and(f64::is_finite)));
+        .any(|cells| cells.values().any(|x| x.finite().is_some()));
     if scored {
         return None;
     }

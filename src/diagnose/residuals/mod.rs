@@ -20,6 +20,7 @@
 //! that lives away from the oil-column resonance is not drowned by the loop's noise
 //! response there.
 
+mod cell;
 mod channels;
 pub(crate) mod noise;
 mod prediction;
@@ -29,6 +30,7 @@ mod spectral;
 mod unrecorded;
 mod whitening;
 
+pub use cell::*;
 pub use channels::*;
 pub use noise::*;
 pub use prediction::*;

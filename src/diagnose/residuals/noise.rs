@@ -152,23 +152,7 @@ fn sensor_lower_bound(ch: Channel) -> Option<f64> {
 /// segment in any test has the sensor noise as its floor (the command's from the gains).
 pub fn estimate_noise(c: &Campaign) -> NoiseFloor {
     use Channel::*;
-    let mut rest_est: PerChannel<Vec<f64>> = Default::default();
-    let mut hf_est: PerChannel<Vec<f64>> = Default::default();
-    for (i, r) in c.records.iter().enumerate() {
-        let rest = c.rest_segment(i);
-        for ch in Channel::ALL {
-            if let Some(m) = ch.measured(r) {
-                if sensor_lower_bound(ch).is_some() {
-                    hf_est[ch].push(fourth_difference_rms(m));
-                }
-                if let Some(rest) = rest.clone() {
-                    rest_est[ch].push(centred_rms(&m[rest]));
-                }
-            }
-        }
-    }
-    let hf = hf_est.map(median);
-    let rest = rest_est.map(median);
+    let (hf, rest) = median_estimates(c);
     // every recorded channel has its rest segments where any has (one reference)
     let have_rest = Channel::ALL.iter().any(|&ch| rest[ch].is_finite());
     let method = if have_rest {
@@ -189,19 +173,13 @@ pub fn estimate_noise(c: &Campaign) -> NoiseFloor {
             below
         }
     };
-    // the gains are known: `diagnose` refuses a campaign without them
-    let k = &c.info.controller;
-    let gain = |g: Option<f64>| g.unwrap_or(0.0);
-    let from_gains = ((gain(k.kp) * sensor[Displacement]).powi(2)
-        + (gain(k.ka) * sensor[Acceleration]).powi(2)
-        + (gain(k.kdp) * sensor[Force]).powi(2))
-    .sqrt();
     NoiseFloor {
         displacement_m: floor(Displacement, sensor[Displacement]),
         acceleration_m_s2: floor(Acceleration, sensor[Acceleration]),
         force_n: floor(Force, sensor[Force]),
         spool: floor(Spool, sensor[Spool]),
-        valve_command: floor(ValveCommand, from_gains).max(lower_bound::VALVE_COMMAND),
+        valve_command: floor(ValveCommand, command_from_gains(c, &sensor))
+            .max(lower_bound::VALVE_COMMAND),
         sensor: SensorLevels {
             displacement_m: sensor[Displacement],
             acceleration_m_s2: sensor[Acceleration],
@@ -210,6 +188,40 @@ pub fn estimate_noise(c: &Campaign) -> NoiseFloor {
         },
         method,
     }
+}
+
+/// Per channel, the median over tests of the high-frequency noise estimate (the sensors
+/// only: fourth difference) and of the rest segments' RMS; NaN where no test gives one.
+fn median_estimates(c: &Campaign) -> (PerChannel<f64>, PerChannel<f64>) {
+    let mut rest_est: PerChannel<Vec<f64>> = Default::default();
+    let mut hf_est: PerChannel<Vec<f64>> = Default::default();
+    for (i, r) in c.records.iter().enumerate() {
+        let rest = c.rest_segment(i);
+        for ch in Channel::ALL {
+            if let Some(m) = ch.measured(r) {
+                if sensor_lower_bound(ch).is_some() {
+                    hf_est[ch].push(fourth_difference_rms(m));
+                }
+                if let Some(rest) = rest.clone() {
+                    rest_est[ch].push(centred_rms(&m[rest]));
+                }
+            }
+        }
+    }
+    (hf_est.map(median), rest_est.map(median))
+}
+
+/// The command's noise from the gains: the controller's response to the feedback sensors'
+/// noise (`sensor`), independent terms adding in power.
+fn command_from_gains(c: &Campaign, sensor: &PerChannel<f64>) -> f64 {
+    use Channel::*;
+    // the gains are known: `diagnose` refuses a campaign without them
+    let k = &c.info.controller;
+    let gain = |g: Option<f64>| g.unwrap_or(0.0);
+    ((gain(k.kp) * sensor[Displacement]).powi(2)
+        + (gain(k.ka) * sensor[Acceleration]).powi(2)
+        + (gain(k.kdp) * sensor[Force]).powi(2))
+    .sqrt()
 }
 
 #[cfg(test)]

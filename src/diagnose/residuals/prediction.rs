@@ -1,6 +1,7 @@
 //! A model's prediction of a test for diagnosis: noise-free and with seeded in-loop
 //! sensor noise (the predicted spread), and the normalised residual per channel.
 
+use super::cell::{Cell, Cells};
 use super::channels::{Channel, PerChannel};
 use super::noise::NoiseFloor;
 use super::run::{readings, simulate_test_with, TestRun};
@@ -10,31 +11,27 @@ use crate::params::Params;
 use crate::{Outputs, SensorNoise};
 use std::ops::Range;
 
-/// Normalised residual RMS per channel over `part` (`None` where the channel is absent or
-/// has no noise estimate, infinite where the run stopped inside `part`): the heat map's
-/// "residual / noise RMS".
-pub fn ratios(
-    r: &Record,
-    run: &TestRun,
-    noise: &NoiseFloor,
-    part: Part,
-) -> PerChannel<Option<f64>> {
+/// Normalised residual RMS per channel over `part` ([`Cell::Absent`] where the channel is
+/// absent or has no noise estimate, [`Cell::Diverged`] where the run stopped inside
+/// `part`): the heat map's "residual / noise RMS".
+pub fn ratios(r: &Record, run: &TestRun, noise: &NoiseFloor, part: Part) -> Cells {
     let range = part.range(r.len());
     PerChannel::from_fn(|ch| {
-        let m = ch.measured(r)?;
-        let s = noise.of(ch)?;
+        let (Some(m), Some(s)) = (ch.measured(r), noise.of(ch)) else {
+            return Cell::Absent;
+        };
         if range.is_empty() {
-            return None;
+            return Cell::Absent;
         }
         let Some(sim) = readings(run).get(range.clone()) else {
-            return Some(f64::INFINITY);
+            return Cell::Diverged;
         };
         let ss: f64 = range
             .clone()
             .zip(sim)
             .map(|(k, o)| (m[k] - ch.simulated(o)).powi(2))
             .sum();
-        Some((ss / range.len() as f64).sqrt() / s)
+        Cell::Scored((ss / range.len() as f64).sqrt() / s)
     })
 }
 

@@ -1,7 +1,8 @@
 //! The predictive score per test and channel: octave bands, windows, the Gaussian log
 //! score of the residual power under the predicted spread.
 
-use super::channels::{Channel, PerChannel};
+use super::cell::{Cell, Cells};
+use super::channels::Channel;
 use super::noise::NoiseFloor;
 use super::prediction::{predict, Prediction};
 use super::spectral::{band_split, octave_bands};
@@ -16,10 +17,6 @@ pub const SCORE_WINDOW: usize = 128;
 
 /// Windows over which the predicted spread is averaged (centred; 1.25 s at 512 Hz).
 pub const SPREAD_WINDOWS: usize = 5;
-
-/// One figure per channel of a test: `None` where the channel is not scored (not
-/// recorded, no noise estimate, too short a part), infinite where the run diverged.
-pub type Cells = PerChannel<Option<f64>>;
 
 /// Held-out figures of a model per channel ([`Cells`]).
 #[derive(Debug, Clone, Copy)]
@@ -106,21 +103,20 @@ pub fn scores(
         deviation: super::ratios(r, &pred.locked, noise, part),
     };
     for ch in Channel::ALL {
-        let Some(bands) = channel_bands(c, i, pred, noise, part, ch) else {
-            continue;
-        };
-        if bands.is_empty() {
-            // a diverged run predicts nothing: an infinite score, never a cell left out
-            // as if the channel were absent
-            out.score[ch] = Some(f64::INFINITY);
-            out.residual[ch] = Some(f64::INFINITY);
-            continue;
+        match channel_bands(c, i, pred, noise, part, ch) {
+            CellBands::Absent => {}
+            CellBands::Diverged => {
+                out.score[ch] = Cell::Diverged;
+                out.residual[ch] = Cell::Diverged;
+            }
+            CellBands::Scored(bands) => {
+                let nb = bands.len() as f64;
+                let score: f64 = bands.iter().map(|b| b.score_term).sum();
+                let ratio: f64 = bands.iter().map(|b| b.ratio).sum();
+                out.score[ch] = Cell::Scored((score / nb).max(0.0).sqrt());
+                out.residual[ch] = Cell::Scored((ratio / nb).sqrt());
+            }
         }
-        let nb = bands.len() as f64;
-        let score: f64 = bands.iter().map(|b| b.score_term).sum();
-        let ratio: f64 = bands.iter().map(|b| b.ratio).sum();
-        out.score[ch] = Some((score / nb).max(0.0).sqrt());
-        out.residual[ch] = Some((ratio / nb).sqrt());
     }
     out
 }
@@ -134,10 +130,22 @@ pub struct BandScore {
     pub score_term: f64,
 }
 
+/// The octave bands of one cell ([`channel_bands`]), or why it has none.
+#[derive(Debug, Clone)]
+pub enum CellBands {
+    /// Nothing to score ([`Cell::Absent`]): the channel is absent, has no noise estimate,
+    /// or the part is too short.
+    Absent,
+    /// The run predicts nothing over the part ([`Cell::Diverged`]): it stopped before the
+    /// part's end, or its residual or spread is not finite (or the rate leaves the channel
+    /// no band to score, below 4 Hz).
+    Diverged,
+    /// Every scored band, from Nyquist down.
+    Scored(Vec<BandScore>),
+}
+
 /// The octave bands of channel `ch` of a prediction of test `i` over `part` (see
-/// [`scores`]; the bands of [`scored_bands`]): `None` when the channel is absent (or has
-/// no noise estimate) or `part` is too short, empty when the run diverged (it stopped
-/// before the part's end, or a non-finite residual or spread).
+/// [`scores`]; the bands of [`scored_bands`]).
 pub fn channel_bands(
     c: &Campaign,
     i: usize,
@@ -145,61 +153,95 @@ pub fn channel_bands(
     noise: &NoiseFloor,
     part: Part,
     ch: Channel,
-) -> Option<Vec<BandScore>> {
+) -> CellBands {
     let r = &c.records[i];
-    let sample_rate_hz = c.sample_rate_of(i);
     let range = part.range(r.len());
-    let m = ch.measured(r)?;
-    let s = noise.of(ch)?;
+    let (Some(m), Some(s)) = (ch.measured(r), noise.of(ch)) else {
+        return CellBands::Absent;
+    };
     if range.len() < 2 {
-        return None;
+        return CellBands::Absent;
     }
     let bands = scored_bands(c, i, ch);
-    let nyquist = sample_rate_hz / 2.0;
-    let white = white_variance(noise, ch, s);
-    // a run that stopped inside the part predicts nothing there
-    let (Some(locked), Some(spread)) = (
-        pred.locked_over(range.clone()),
-        pred.spread(range.clone(), ch),
-    ) else {
-        return Some(Vec::new());
+    let Some((residual, spread)) = cell_signals(pred, m, range, ch) else {
+        return CellBands::Diverged;
     };
+    if bands.is_empty() {
+        return CellBands::Diverged;
+    }
+    let cell = BandedCell {
+        sample_rate_hz: c.sample_rate_of(i),
+        white: white_variance(noise, ch, s),
+        floor: s,
+    };
+    CellBands::Scored(cell.band_scores(&residual, &spread, &bands))
+}
+
+/// The residual of a cell over `range` (measured minus the locked run) and its predicted
+/// spread per noisy run ([`Prediction::spread`]); `None` when the run predicts nothing
+/// there (it stopped inside the range, or a sample is not finite).
+fn cell_signals(
+    pred: &Prediction,
+    m: &[f64],
+    range: std::ops::Range<usize>,
+    ch: Channel,
+) -> Option<(Vec<f64>, Vec<Vec<f64>>)> {
+    let locked = pred.locked_over(range.clone())?;
+    let spread = pred.spread(range.clone(), ch)?;
     let residual: Vec<f64> = range
         .zip(locked)
         .map(|(k, o)| m[k] - ch.simulated(o))
         .collect();
-    if residual
+    let finite = residual
         .iter()
         .chain(spread.iter().flatten())
-        .any(|x| !x.is_finite())
-    {
-        return Some(Vec::new());
+        .all(|x| x.is_finite());
+    finite.then_some((residual, spread))
+}
+
+/// What scoring a cell band by band needs besides its signals: the test's rate, the
+/// variance of independent measurement noise over the whole spectrum
+/// ([`white_variance`]) and the channel's noise floor (its RMS).
+struct BandedCell {
+    sample_rate_hz: f64,
+    white: f64,
+    floor: f64,
+}
+
+impl BandedCell {
+    /// The [`BandScore`] of every band of `bands`: the residual and each spread split
+    /// into the bands, each band scored in windows of [`WINDOW_DOF`] degrees of freedom
+    /// ([`band_score`]) with its share of the white noise.
+    fn band_scores(
+        &self,
+        residual: &[f64],
+        spread: &[Vec<f64>],
+        bands: &[(f64, f64)],
+    ) -> Vec<BandScore> {
+        let fs = self.sample_rate_hz;
+        let nyquist = fs / 2.0;
+        let meas_bands = band_split(residual, bands, fs);
+        let spread_bands: Vec<Vec<Vec<f64>>> =
+            spread.iter().map(|x| band_split(x, bands, fs)).collect();
+        bands
+            .iter()
+            .enumerate()
+            .map(|(b, &(lo, hi))| {
+                let width = hi - lo;
+                let window = ((WINDOW_DOF * fs / (2.0 * width)).ceil() as usize).max(SCORE_WINDOW);
+                let share = width / nyquist;
+                let sp: Vec<Vec<f64>> = spread_bands.iter().map(|x| x[b].clone()).collect();
+                let (q, log) = band_score(&meas_bands[b], &sp, window, self.white * share);
+                // the log term relative to the floor's share of the band, so that a model
+                // predicting the floor scores as the ratio alone
+                BandScore {
+                    band_hz: (lo, hi),
+                    ratio: q,
+                    score_term: q + log - (self.floor * self.floor * share).ln(),
+                }
+            })
+            .collect()
     }
-    let meas_bands = band_split(&residual, &bands, sample_rate_hz);
-    let spread_bands: Vec<Vec<Vec<f64>>> = spread
-        .iter()
-        .map(|x| band_split(x, &bands, sample_rate_hz))
-        .collect();
-    let out = bands
-        .iter()
-        .enumerate()
-        .map(|(b, &(lo, hi))| {
-            let width = hi - lo;
-            let window =
-                ((WINDOW_DOF * sample_rate_hz / (2.0 * width)).ceil() as usize).max(SCORE_WINDOW);
-            let share = width / nyquist;
-            let sp: Vec<Vec<f64>> = spread_bands.iter().map(|x| x[b].clone()).collect();
-            let (q, log) = band_score(&meas_bands[b], &sp, window, white * share);
-            // the log term relative to the floor's share of the band, so that a model
-            // predicting the floor scores as the ratio alone
-            BandScore {
-                band_hz: (lo, hi),
-                ratio: q,
-                score_term: q + log - (s * s * share).ln(),
-            }
-        })
-        .collect();
-    Some(out)
 }
 
 /// The octave bands of test `i`'s rate scored on its channel `ch`: all of them, except
@@ -297,9 +339,9 @@ pub fn test_scores_of_parts(
                 && !measured_beyond_envelope(p, &c.records[i], range);
             if held && left {
                 let inf = CellScores {
-                    score: Cells::filled(Some(f64::INFINITY)),
-                    residual: Cells::filled(Some(f64::INFINITY)),
-                    deviation: Cells::filled(Some(f64::INFINITY)),
+                    score: Cells::filled(Cell::Diverged),
+                    residual: Cells::filled(Cell::Diverged),
+                    deviation: Cells::filled(Cell::Diverged),
                 };
                 return (inf, left);
             }
@@ -340,7 +382,7 @@ pub fn score_sum(p: &Params, c: &Campaign, tests: &[usize], noise: &NoiseFloor, 
             test_scores(p, c, i, part, noise)
                 .score
                 .values()
-                .flatten()
+                .filter_map(|cell| cell.figure())
                 .map(|x| x * x)
                 .sum::<f64>()
         })

@@ -30,58 +30,7 @@ impl Whitening {
         use rayon::prelude::*;
         let per: Vec<(usize, PerChannel<Vec<f64>>)> = tests
             .par_iter()
-            .map(|&i| {
-                // each test's octave bands at its own rate
-                let fs = c.sample_rate_of(i);
-                let bands = octave_bands(fs);
-                let r = &c.records[i];
-                let range = part.range(r.len());
-                let pred = predict(p, c, i, part.simulated(), noise);
-                let mut w: PerChannel<Vec<f64>> = Default::default();
-                let n = range.len();
-                if n < 2 {
-                    return (i, w);
-                }
-                let band_of = |k: usize| {
-                    let f = k as f64 * fs / (2 * n) as f64;
-                    bands
-                        .iter()
-                        .position(|&(lo, hi)| f >= lo && f < hi)
-                        .unwrap_or(0)
-                };
-                let kmax = ((FIT_MAX_HZ * 2.0 * n as f64 / fs).ceil() as usize).min(n);
-                let nb = bands.len() as f64;
-                for ch in Channel::ALL {
-                    let (Some(_), Some(s)) = (ch.measured(r), noise.of(ch)) else {
-                        continue;
-                    };
-                    let Some(spreads) = pred.spread(range.clone(), ch) else {
-                        // a run that stopped predicts no spread: every coefficient gets the
-                        // power floor's weight, the largest there is
-                        w[ch] = vec![1.0 / (nb * f64::MIN_POSITIVE).sqrt(); kmax];
-                        continue;
-                    };
-                    let white = white_variance(noise, ch, s);
-                    let mut energy = vec![0.0; bands.len()];
-                    let mut count = vec![0usize; bands.len()];
-                    for spread in spreads {
-                        for (k, v) in dct(&spread).iter().enumerate() {
-                            energy[band_of(k)] += v * v / pred.noisy.len() as f64;
-                        }
-                    }
-                    for k in 0..n {
-                        count[band_of(k)] += 1;
-                    }
-                    w[ch] = (0..kmax)
-                        .map(|k| {
-                            let b = band_of(k);
-                            let e = energy[b] + white * n as f64 / 2.0 * count[b] as f64;
-                            1.0 / (nb * e.max(f64::MIN_POSITIVE)).sqrt()
-                        })
-                        .collect();
-                }
-                (i, w)
-            })
+            .map(|&i| (i, test_weights(p, c, i, noise, part)))
             .collect();
         let mut weights = vec![Default::default(); c.records.len()];
         for (i, w) in per {
@@ -154,6 +103,102 @@ impl Whitening {
             out[ch] = Some(weighted(&x, wc).map(|v| v * v).sum());
         }
         out
+    }
+}
+
+/// The weights of test `i` per channel (empty where the channel is absent or has no
+/// noise estimate, or the part is too short) from `p`'s prediction over `part`.
+fn test_weights(
+    p: &Params,
+    c: &Campaign,
+    i: usize,
+    noise: &NoiseFloor,
+    part: Part,
+) -> PerChannel<Vec<f64>> {
+    let r = &c.records[i];
+    let range = part.range(r.len());
+    let pred = predict(p, c, i, part.simulated(), noise);
+    let mut w: PerChannel<Vec<f64>> = Default::default();
+    if range.len() < 2 {
+        return w;
+    }
+    // each test's octave bands at its own rate
+    let coefficients = CoefficientBands::new(c.sample_rate_of(i), range.len());
+    for ch in Channel::ALL {
+        let (Some(_), Some(s)) = (ch.measured(r), noise.of(ch)) else {
+            continue;
+        };
+        w[ch] = match pred.spread(range.clone(), ch) {
+            Some(spreads) => {
+                let white = white_variance(noise, ch, s);
+                coefficients.weights(&spreads, pred.noisy.len(), white)
+            }
+            // a run that stopped predicts no spread: every coefficient gets the power
+            // floor's weight, the largest there is
+            None => coefficients.floor_weights(),
+        };
+    }
+    w
+}
+
+/// The DCT coefficients of a part of `n` samples at `fs` and the octave band each falls
+/// in; those up to [`FIT_MAX_HZ`] are weighed.
+struct CoefficientBands {
+    fs: f64,
+    n: usize,
+    bands: Vec<(f64, f64)>,
+    /// Coefficients weighed: those below [`FIT_MAX_HZ`].
+    kmax: usize,
+}
+
+impl CoefficientBands {
+    fn new(fs: f64, n: usize) -> Self {
+        let kmax = ((FIT_MAX_HZ * 2.0 * n as f64 / fs).ceil() as usize).min(n);
+        CoefficientBands {
+            fs,
+            n,
+            bands: octave_bands(fs),
+            kmax,
+        }
+    }
+
+    /// The octave band of coefficient `k` (frequency `k fs / 2n`).
+    fn band_of(&self, k: usize) -> usize {
+        let f = k as f64 * self.fs / (2 * self.n) as f64;
+        self.bands
+            .iter()
+            .position(|&(lo, hi)| f >= lo && f < hi)
+            .unwrap_or(0)
+    }
+
+    /// Every coefficient's weight when nothing is predicted: the power floor's.
+    fn floor_weights(&self) -> Vec<f64> {
+        let nb = self.bands.len() as f64;
+        vec![1.0 / (nb * f64::MIN_POSITIVE).sqrt(); self.kmax]
+    }
+
+    /// The weights from the predicted `spreads` (of `realisations` noisy runs) and the
+    /// variance `white` of the noise the prediction does not hold: `1 / sqrt(bands *
+    /// E_b)`, `E_b` the energy per coefficient in the coefficient's band.
+    fn weights(&self, spreads: &[Vec<f64>], realisations: usize, white: f64) -> Vec<f64> {
+        let (n, nb) = (self.n, self.bands.len() as f64);
+        let mut energy = vec![0.0; self.bands.len()];
+        let mut count = vec![0usize; self.bands.len()];
+        for spread in spreads {
+            for (k, v) in dct(spread).iter().enumerate() {
+                energy[self.band_of(k)] += v * v / realisations as f64;
+            }
+        }
+        for k in 0..n {
+            count[self.band_of(k)] += 1;
+        }
+        (0..self.kmax)
+            .map(|k| {
+                let b = self.band_of(k);
+                let e = energy[b] + white * n as f64 / 2.0 * count[b] as f64;
+                1.0 / (nb * e.max(f64::MIN_POSITIVE)).sqrt()
+            })
+            .collect()
     }
 }
 
