@@ -268,20 +268,7 @@ pub(super) fn higher_mode_starts(effect: Effect, c: &Campaign, base: &Params) ->
     });
     peaks.extend(most_departing.filter(|k| !peaks.contains(k)));
     let z = grid::SPECIMEN_DAMPING;
-    // every mode afresh at the highest measured peaks, in case the modes so far bent to
-    // absorb the next one (a one-mode fit drawn between two peaks)
-    let mut highest = highest_peaks(&f, &height, &[], modes.len() + 1);
-    highest.sort_unstable();
-    let afresh: Vec<SpecimenMode> = highest
-        .iter()
-        .map(|&k| SpecimenMode {
-            mass_kg: 2.0 * z * height[k],
-            frequency_hz: f[k],
-            damping_ratio: z,
-        })
-        .collect();
-    (highest.len() == modes.len() + 1)
-        .then(|| specimen_values(effect, &afresh))
+    every_mode_afresh(effect, &f, &height, modes.len() + 1)
         .into_iter()
         .chain(
             peaks
@@ -301,6 +288,29 @@ pub(super) fn higher_mode_starts(effect: Effect, c: &Campaign, base: &Params) ->
                 }),
         )
         .collect()
+}
+
+/// Every one of `modes` modes afresh at the highest measured peaks of the apparent mass
+/// (`height` over `f`), in case the modes so far bent to absorb the next one (a one-mode
+/// fit drawn between two peaks); `None` when fewer peaks show.
+fn every_mode_afresh(
+    effect: Effect,
+    f: &[f64],
+    height: &[f64],
+    modes: usize,
+) -> Option<EffectValues> {
+    let z = grid::SPECIMEN_DAMPING;
+    let mut highest = highest_peaks(f, height, &[], modes);
+    highest.sort_unstable();
+    let afresh: Vec<SpecimenMode> = highest
+        .iter()
+        .map(|&k| SpecimenMode {
+            mass_kg: 2.0 * z * height[k],
+            frequency_hz: f[k],
+            damping_ratio: z,
+        })
+        .collect();
+    (highest.len() == modes).then(|| specimen_values(effect, &afresh))
 }
 
 /// The specimen's blind grid ([`grid::SPECIMEN_BLIND_FREQUENCIES_HZ`]) on a table of
