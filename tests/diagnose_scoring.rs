@@ -62,6 +62,7 @@ fn sensor_noise_is_recovered_from_the_data() {
             (s.force_n, truth.force_n, "force"),
             (s.spool, truth.spool, "spool"),
         ] {
+            let got = got.unwrap_or_else(|| panic!("{what}: recorded, yet no level"));
             // 18 records of >= 32 s each: the median's sampling error is well below 1 %;
             // 3 % leaves room for the table's own content above 100 Hz in R1 and R3
             assert!(
@@ -72,6 +73,7 @@ fn sensor_noise_is_recovered_from_the_data() {
         // the floor (what a noise-free model cannot predict at rest) holds the loop's
         // response to the noise as well, so it is never below the sensor noise
         assert!(n.force_n >= s.force_n && n.acceleration_m_s2 >= s.acceleration_m_s2);
+        assert!(n.force_n.is_some() && n.acceleration_m_s2.is_some());
     }
 }
 

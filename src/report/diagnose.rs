@@ -276,12 +276,20 @@ fn table_tfs(c: &Campaign, d: &Diagnosis, i: usize) -> Option<[FrfEstimate; 3]> 
 
 /// The summary: the causes, the gain, the baseline's structure and noise floor, the rule.
 fn write_summary(html: &mut String, md: &mut String, c: &Campaign, d: &Diagnosis, cause: &str) {
+    // a channel no test recorded has no floor
+    let level = |x: Option<f64>, unit: &str| {
+        x.map_or("not recorded".to_string(), |x| format!("{x:.3e}{unit}"))
+    };
+    let force = d
+        .noise
+        .force_n
+        .map_or("not recorded".to_string(), |x| format!("{x:.1} N"));
     let _ = write!(
         html,
         "<h1>Diagnosis of {}</h1><p><b>Cause: {cause}</b>, gain {:.2} on the report quarter (data no fit or decision saw), explained: {}.</p>\
          <p>Baseline: servovalve {}, actuator {} (chosen by output error: cost {:.4e} ideal, {:.4e} nonlinear); \
-         noise floor from {}: displacement {:.3e} m, acceleration {:.3e} m/s^2, force {:.1} N, spool {:.3e}, \
-         valve command {:.3e}.</p>{}<p>Rule: {}</p>",
+         noise floor from {}: displacement {}, acceleration {}, force {force}, spool {}, \
+         valve command {}.</p>{}<p>Rule: {}</p>",
         escape_html(&c.info.name),
         d.gain,
         d.explained,
@@ -290,11 +298,10 @@ fn write_summary(html: &mut String, md: &mut String, c: &Campaign, d: &Diagnosis
         d.actuator_costs[0],
         d.actuator_costs[1],
         d.noise.method,
-        d.noise.displacement_m,
-        d.noise.acceleration_m_s2,
-        d.noise.force_n,
-        d.noise.spool,
-        d.noise.valve_command,
+        level(d.noise.displacement_m, " m"),
+        level(d.noise.acceleration_m_s2, " m/s^2"),
+        level(d.noise.spool, ""),
+        level(d.noise.valve_command, ""),
         d.structure_change()
             .map(|s| format!("<p>Note: {}.</p>", escape_html(&s)))
             .unwrap_or_default(),

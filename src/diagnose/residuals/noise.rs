@@ -16,14 +16,15 @@ pub struct NoiseFloor {
     /// The floor, in which residuals are counted: what a noise-free simulation cannot
     /// predict at rest, i.e. the sensor noise plus the loop's response to it (the
     /// oil-column resonance makes the latter several times the former in acceleration
-    /// and force). Displacement (LVDT), m.
-    pub displacement_m: f64,
-    pub acceleration_m_s2: f64,
-    pub force_n: f64,
-    pub spool: f64,
+    /// and force). Displacement (LVDT), m. `None` (JSON `null`) for a channel no test
+    /// recorded.
+    pub displacement_m: Option<f64>,
+    pub acceleration_m_s2: Option<f64>,
+    pub force_n: Option<f64>,
+    pub spool: Option<f64>,
     /// The command at rest: the controller's response to the feedback noise (the
     /// command itself is recorded without measurement noise).
-    pub valve_command: f64,
+    pub valve_command: Option<f64>,
     /// The sensor noise alone (white), which the noisy runs of [`predict`] feed into the
     /// loop and which bounds every window's predicted spread from below.
     pub sensor: SensorLevels,
@@ -31,18 +32,19 @@ pub struct NoiseFloor {
     pub method: &'static str,
 }
 
-/// White sensor-noise RMS of the measured channels.
+/// White sensor-noise RMS of the measured channels, `None` (JSON `null`) for a sensor no
+/// test recorded.
 #[derive(Debug, Clone, Copy, Serialize)]
 pub struct SensorLevels {
-    pub displacement_m: f64,
-    pub acceleration_m_s2: f64,
-    pub force_n: f64,
-    pub spool: f64,
+    pub displacement_m: Option<f64>,
+    pub acceleration_m_s2: Option<f64>,
+    pub force_n: Option<f64>,
+    pub spool: Option<f64>,
 }
 
 impl NoiseFloor {
     /// Noise floor of channel `ch` (the residual's unit); `None` when no test recorded
-    /// the channel (the field is NaN).
+    /// the channel.
     pub fn of(&self, ch: Channel) -> Option<f64> {
         let floor = match ch {
             Channel::Displacement => self.displacement_m,
@@ -51,19 +53,20 @@ impl NoiseFloor {
             Channel::Spool => self.spool,
             Channel::ValveCommand => self.valve_command,
         };
-        floor.is_finite().then_some(floor)
+        floor.filter(|x| x.is_finite())
     }
 
     /// Measurement noise of channel `ch` alone (the command has none: its spread is the
-    /// loop's response, which the noisy run predicts).
-    pub fn measurement(&self, ch: Channel) -> f64 {
+    /// loop's response, which the noisy run predicts); `None` for a sensor no test
+    /// recorded.
+    pub fn measurement(&self, ch: Channel) -> Option<f64> {
         let s = &self.sensor;
         match ch {
             Channel::Displacement => s.displacement_m,
             Channel::Acceleration => s.acceleration_m_s2,
             Channel::Force => s.force_n,
             Channel::Spool => s.spool,
-            Channel::ValveCommand => 0.0,
+            Channel::ValveCommand => Some(0.0),
         }
     }
 
@@ -76,13 +79,12 @@ impl NoiseFloor {
 }
 
 /// `n` samples of seeded white noise of RMS `[LVDT, accelerometer, force]` on the
-/// feedback sensors. A level that is not finite (a sensor no test recorded has no noise
-/// estimate) feeds the loop none, rather than NaN that would end every noisy run (a
-/// campaign without an accelerometer, issue 16 part 5).
-pub(super) fn white_loop_noise(rms: [f64; 3], n: usize, seed: u64) -> Vec<SensorNoise> {
+/// feedback sensors. A sensor without a level (no test recorded it) feeds the loop none,
+/// rather than a guess (a campaign without an accelerometer, issue 16 part 5).
+pub(super) fn white_loop_noise(rms: [Option<f64>; 3], n: usize, seed: u64) -> Vec<SensorNoise> {
     let mut rng = ChaCha8Rng::seed_from_u64(seed);
     let normal = Normal::new(0.0, 1.0).expect("unit normal");
-    let [d, a, f] = rms.map(|x| if x.is_finite() { x } else { 0.0 });
+    let [d, a, f] = rms.map(|x| x.filter(|x| x.is_finite()).unwrap_or(0.0));
     (0..n)
         .map(|_| SensorNoise {
             displacement_m: d * normal.sample(&mut rng),
@@ -160,15 +162,15 @@ pub fn estimate_noise(c: &Campaign) -> NoiseFloor {
     } else {
         FROM_HIGH_FREQUENCIES
     };
-    // NaN where no test recorded the sensor
+    // none where no test recorded the sensor
     let sensor = PerChannel::from_fn(|ch| match sensor_lower_bound(ch) {
-        Some(lower) if hf[ch].is_finite() => hf[ch].max(lower),
-        _ => f64::NAN,
+        Some(lower) if hf[ch].is_finite() => Some(hf[ch].max(lower)),
+        _ => None,
     });
     // the floor is never below the sensor noise (the command's: the loop's response to it)
-    let floor = |ch: Channel, below: f64| {
+    let floor = |ch: Channel, below: Option<f64>| {
         if rest[ch].is_finite() {
-            rest[ch].max(below)
+            Some(below.map_or(rest[ch], |b| rest[ch].max(b)))
         } else {
             below
         }
@@ -178,8 +180,12 @@ pub fn estimate_noise(c: &Campaign) -> NoiseFloor {
         acceleration_m_s2: floor(Acceleration, sensor[Acceleration]),
         force_n: floor(Force, sensor[Force]),
         spool: floor(Spool, sensor[Spool]),
-        valve_command: floor(ValveCommand, command_from_gains(c, &sensor))
-            .max(lower_bound::VALVE_COMMAND),
+        valve_command: Some(
+            floor(ValveCommand, command_from_gains(c, &sensor))
+                .map_or(lower_bound::VALVE_COMMAND, |x| {
+                    x.max(lower_bound::VALVE_COMMAND)
+                }),
+        ),
         sensor: SensorLevels {
             displacement_m: sensor[Displacement],
             acceleration_m_s2: sensor[Acceleration],
@@ -212,16 +218,19 @@ fn median_estimates(c: &Campaign) -> (PerChannel<f64>, PerChannel<f64>) {
 }
 
 /// The command's noise from the gains: the controller's response to the feedback sensors'
-/// noise (`sensor`), independent terms adding in power.
-fn command_from_gains(c: &Campaign, sensor: &PerChannel<f64>) -> f64 {
+/// noise (`sensor`), independent terms adding in power; `None` when a sensor it needs
+/// has no level.
+fn command_from_gains(c: &Campaign, sensor: &PerChannel<Option<f64>>) -> Option<f64> {
     use Channel::*;
     // the gains are known: `diagnose` refuses a campaign without them
     let k = &c.info.controller;
     let gain = |g: Option<f64>| g.unwrap_or(0.0);
-    ((gain(k.kp) * sensor[Displacement]).powi(2)
-        + (gain(k.ka) * sensor[Acceleration]).powi(2)
-        + (gain(k.kdp) * sensor[Force]).powi(2))
-    .sqrt()
+    Some(
+        ((gain(k.kp) * sensor[Displacement]?).powi(2)
+            + (gain(k.ka) * sensor[Acceleration]?).powi(2)
+            + (gain(k.kdp) * sensor[Force]?).powi(2))
+        .sqrt(),
+    )
 }
 
 #[cfg(test)]

@@ -6,6 +6,7 @@
 //! [`super::predict`] then feed back as on the table (without it they predict a spread
 //! several times too small around the oil column, and every test looks missed there).
 
+use super::channels::Channel;
 use super::noise::{from_rest, median, white_loop_noise, NoiseFloor};
 use super::run::{with_test_gains, DIAGNOSIS_SUBSTEP_S};
 use crate::campaign::{Campaign, Measured};
@@ -39,7 +40,7 @@ impl NoiseFloor {
     /// it) is in the acceleration too, and the LVDT's estimate takes it in.
     pub fn with_unrecorded_lvdt(mut self, p: &Params, c: &Campaign) -> NoiseFloor {
         let recorded = |m| c.records.iter().any(|r| r.measured(m).is_some());
-        if recorded(Measured::Displacement) || !self.acceleration_m_s2.is_finite() {
+        if recorded(Measured::Displacement) || self.of(Channel::Acceleration).is_none() {
             return self;
         }
         let rests: Vec<RestExcess> = (0..c.records.len())
@@ -61,7 +62,7 @@ impl NoiseFloor {
             level = Some(estimate);
         }
         if let Some(level) = level {
-            self.sensor.displacement_m = level;
+            self.sensor.displacement_m = Some(level);
             self.method = FROM_REST_WITH_LVDT;
         }
         self
@@ -89,7 +90,8 @@ impl RestExcess {
         let acceleration = c.records[i].measured(Measured::Acceleration)?;
         let measured = centred_rms(&acceleration[c.rest_segment(i)?]).powi(2);
         let s = &noise.sensor;
-        let others = rest_acceleration_variance(p, c, i, [0.0, s.acceleration_m_s2, s.force_n])?;
+        let others =
+            rest_acceleration_variance(p, c, i, [Some(0.0), s.acceleration_m_s2, s.force_n])?;
         Some(RestExcess {
             test: i,
             variance_m2_s4: measured - others,
@@ -101,7 +103,8 @@ impl RestExcess {
     /// stops or shows no response, or nothing is in excess.
     fn lvdt_noise(&self, p: &Params, c: &Campaign, probe_m: f64) -> Option<f64> {
         let per_unit =
-            rest_acceleration_variance(p, c, self.test, [probe_m, 0.0, 0.0])? / probe_m.powi(2);
+            rest_acceleration_variance(p, c, self.test, [Some(probe_m), Some(0.0), Some(0.0)])?
+                / probe_m.powi(2);
         (per_unit > 0.0 && self.variance_m2_s4 > 0.0)
             .then(|| (self.variance_m2_s4 / per_unit).sqrt())
     }
@@ -112,7 +115,12 @@ impl RestExcess {
 /// model starts at the centre of the stroke, and a test resting at an offset would start
 /// with a step), with white noise of RMS `[LVDT, accelerometer, force]` fed back; `None`
 /// when the run stops.
-fn rest_acceleration_variance(p: &Params, c: &Campaign, i: usize, rms: [f64; 3]) -> Option<f64> {
+fn rest_acceleration_variance(
+    p: &Params,
+    c: &Campaign,
+    i: usize,
+    rms: [Option<f64>; 3],
+) -> Option<f64> {
     let fs = c.sample_rate_of(i);
     let samples = (PROBE_S * fs).ceil() as usize;
     let at_rest = vec![Inputs::default(); samples];
@@ -173,8 +181,12 @@ mod tests {
                 r.displacement_m = None;
             }
             let noise = estimate_noise(&c);
-            assert!(noise.sensor.displacement_m.is_nan());
-            let inferred = noise.with_unrecorded_lvdt(&truth, &c).sensor.displacement_m;
+            assert_eq!(noise.sensor.displacement_m, None);
+            let inferred = noise
+                .with_unrecorded_lvdt(&truth, &c)
+                .sensor
+                .displacement_m
+                .expect("the LVDT's noise inferred");
             let error = inferred / lvdt_m - 1.0;
             assert!(
                 error.abs() < LVDT_NOISE_TOLERANCE,

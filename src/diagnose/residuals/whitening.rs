@@ -213,10 +213,12 @@ fn weighted<'a>(x: &[f64], weights: &'a [f64]) -> impl Iterator<Item = f64> + 'a
 
 /// Variance of the noise a prediction does not hold in channel `ch`, whose noise floor is
 /// `floor`: the spool's (never fed back) and a tiny floor for the others (the command is
-/// recorded without noise; the sensors' noise is in the prediction).
+/// recorded without noise; the sensors' noise is in the prediction). A spool with a floor
+/// has its sensor level too (the floor is the larger of the rest's and the sensor's); none
+/// would leave it no white variance.
 pub(super) fn white_variance(noise: &NoiseFloor, ch: Channel, floor: f64) -> f64 {
     if ch == Channel::Spool {
-        noise.measurement(ch).powi(2)
+        noise.measurement(ch).map_or(0.0, |s| s.powi(2))
     } else {
         TINY_WHITE_VARIANCE * floor.powi(2)
     }
