@@ -4,6 +4,9 @@ use shaketable::params::{ActuatorModel, ServovalveModel};
 use shaketable::solver::DEFAULT_MAX_SUBSTEP_S;
 use shaketable::{simulate_record, Model, Params};
 
+/// One reading of a sample.
+type Reading = fn(&shaketable::Outputs) -> f64;
+
 mod common;
 use common::{sine, FS};
 
@@ -98,7 +101,7 @@ fn halving_the_substep_changes_outputs_by_less_than_1e_6_of_rms() {
             let m = Model::new(&params);
             let a = simulate_record(&m, &inputs, FS, None, DEFAULT_MAX_SUBSTEP_S).unwrap();
             let b = simulate_record(&m, &inputs, FS, None, DEFAULT_MAX_SUBSTEP_S / 2.0).unwrap();
-            let channels: [(&str, fn(&shaketable::Outputs) -> f64); 6] = [
+            let channels: [(&str, Reading); 6] = [
                 ("valve_command", |o| o.valve_command),
                 ("spool_position", |o| o.spool_position),
                 ("displacement", |o| o.displacement_m),

@@ -209,7 +209,7 @@ mod tests {
         let mut v: Vec<f64> = (0..200)
             .map(|k| ((k as f64) / 50.0 * std::f64::consts::PI).sin())
             .collect();
-        v.extend(std::iter::repeat(0.0).take(100));
+        v.extend(std::iter::repeat_n(0.0, 100));
         // the last motion was negative: setting off positive after the rest
         v.extend((0..50).map(|k| (k as f64 + 1.0) / 50.0));
         let r = reversals(&v, fs);

@@ -2,7 +2,9 @@
 //! the extended model and its gain on held-out tests.
 
 use shaketable::campaign::format::read_campaign;
-use shaketable::diagnose::{diagnose, unexplained_responses, Channel, Effort};
+use shaketable::diagnose::{
+    diagnose, unexplained_responses, Channel, Diagnosis, Effort, ModelErrorPeak,
+};
 use std::path::PathBuf;
 
 #[derive(clap::Args)]
@@ -49,14 +51,7 @@ pub fn run(args: Args) -> anyhow::Result<()> {
         inputs,
     )?
     .with_baseline_out(args.baseline_out.as_deref())?;
-    let bar = (!args.quiet).then(|| {
-        let b = indicatif::ProgressBar::new(1);
-        b.set_style(
-            indicatif::ProgressStyle::with_template("{elapsed:>4} [{bar:30}] {pos}/{len} {msg}")
-                .unwrap_or_else(|_| indicatif::ProgressStyle::default_bar()),
-        );
-        b
-    });
+    let bar = progress_bar(args.quiet);
     // SHAKETABLE_TRACE=1: each step's start time on stderr (for timing runs)
     let trace = shaketable::diagnose::trace_enabled();
     let report = |i: usize, n: usize, what: &str| {
@@ -79,6 +74,54 @@ pub fn run(args: Args) -> anyhow::Result<()> {
         b.finish_and_clear();
     }
     let d = d.map_err(|e| anyhow::anyhow!("{}: {e}", args.campaign.display()))?;
+    print_baseline(&d, &args.campaign, t0);
+    print_searches(&d)?;
+    let mut j = d.to_json();
+    // issue 17 part 4: where the worst unexplained cell's model-error response peaks
+    // (null when explained or when no cell has a response)
+    // the report draws the worst few: the first one's simulation serves both
+    let cells = match args.report {
+        Some(_) => shaketable::report::MODEL_ERROR_FIGURES,
+        None => 1,
+    };
+    let responses = unexplained_responses(&d, &campaign, cells);
+    let peak = responses
+        .iter()
+        .find_map(|c| c.response.as_ref().ok()?.peak());
+    j["model_error_peak"] = serde_json::to_value(&peak)?;
+    print_verdict(&d, &j, peak.as_ref());
+    print_fits(&d);
+    if let Some(note) = d.structure_change() {
+        println!("{note}");
+    }
+    outputs.write_baseline(&d.baseline.to_toml_string())?;
+    outputs.write(
+        &(serde_json::to_string_pretty(&j)? + "\n"),
+        &d.extended.to_toml_string(),
+        |dir| {
+            Ok(shaketable::report::diagnose::write(
+                dir, &campaign, &d, &responses,
+            )?)
+        },
+    )?;
+    Ok(())
+}
+
+/// The progress bar naming the running stage; none with `--quiet`.
+fn progress_bar(quiet: bool) -> Option<indicatif::ProgressBar> {
+    (!quiet).then(|| {
+        let b = indicatif::ProgressBar::new(1);
+        b.set_style(
+            indicatif::ProgressStyle::with_template("{elapsed:>4} [{bar:30}] {pos}/{len} {msg}")
+                .unwrap_or_else(|_| indicatif::ProgressStyle::default_bar()),
+        );
+        b
+    })
+}
+
+/// The notes, the timing and the baseline: its structure, noise floor and residual per
+/// test and channel, and its scores on the cells it misses.
+fn print_baseline(d: &Diagnosis, campaign: &std::path::Path, t0: std::time::Instant) {
     for f in &d.identification.screening {
         println!("screening: {f}");
     }
@@ -90,7 +133,7 @@ pub fn run(args: Args) -> anyhow::Result<()> {
     }
     println!(
         "diagnosis of {} ({:.1} s)",
-        args.campaign.display(),
+        campaign.display(),
         t0.elapsed().as_secs_f64()
     );
     if d.effort == Effort::Quick {
@@ -124,6 +167,11 @@ pub fn run(args: Args) -> anyhow::Result<()> {
         "baseline: selection score on its missed cells {:.3}, report residual on its missed cells {:.3}",
         d.baseline_score, d.baseline_heldout
     );
+}
+
+/// The first search's candidates, the causes accepted, what could not be tested and
+/// what explains only in part.
+fn print_searches(d: &Diagnosis) -> anyhow::Result<()> {
     println!("first search's candidates (selection residual, score, report residual, parameters):");
     for c in &d.candidates {
         let ps: Vec<String> = c
@@ -169,19 +217,12 @@ pub fn run(args: Args) -> anyhow::Result<()> {
             p.why_not_a_cause
         );
     }
-    let mut j = d.to_json();
-    // issue 17 part 4: where the worst unexplained cell's model-error response peaks
-    // (null when explained or when no cell has a response)
-    // the report draws the worst few: the first one's simulation serves both
-    let cells = match args.report {
-        Some(_) => shaketable::report::MODEL_ERROR_FIGURES,
-        None => 1,
-    };
-    let responses = unexplained_responses(&d, &campaign, cells);
-    let peak = responses
-        .iter()
-        .find_map(|c| c.response.as_ref().ok()?.peak());
-    j["model_error_peak"] = serde_json::to_value(&peak)?;
+    Ok(())
+}
+
+/// The verdict (`j` is the JSON written), where the residual left lies, the sensors'
+/// findings and the model-error response's `peak`.
+fn print_verdict(d: &Diagnosis, j: &serde_json::Value, peak: Option<&ModelErrorPeak>) {
     println!(
         "cause: {}  gain {:.2}  explained {}  parameters {}",
         j["cause"].as_str().unwrap_or("none"),
@@ -208,12 +249,17 @@ pub fn run(args: Args) -> anyhow::Result<()> {
     if let Some(k) = &d.kinematics {
         println!("  {}", k.text().replace('\n', "\n  "));
     }
-    if let Some(p) = &peak {
+    if let Some(p) = peak {
         println!(
             "  model-error response of {} {} (per {}) peaks at {:.2} Hz: gain {:.3e} {}, coherence {:.2}",
             p.test, p.channel, p.input, p.frequency_hz, p.gain, p.unit, p.coherence
         );
     }
+}
+
+/// The median fit per channel on the report quarters, baseline and extended, beside
+/// what the noise at rest allows.
+fn print_fits(d: &Diagnosis) {
     let median = |x: Option<(f64, usize)>| {
         x.map_or("no run got through".to_string(), |(m, n)| {
             format!("{m:.1} % (median of {n} tests)")
@@ -233,18 +279,4 @@ pub fn run(args: Args) -> anyhow::Result<()> {
             median(m.extended),
         );
     }
-    if let Some(note) = d.structure_change() {
-        println!("{note}");
-    }
-    outputs.write_baseline(&d.baseline.to_toml_string())?;
-    outputs.write(
-        &(serde_json::to_string_pretty(&j)? + "\n"),
-        &d.extended.to_toml_string(),
-        |dir| {
-            Ok(shaketable::report::diagnose::write(
-                dir, &campaign, &d, &responses,
-            )?)
-        },
-    )?;
-    Ok(())
 }
