@@ -4,7 +4,7 @@
 # seeds 303, 404 and 504, the identification JSON and parameter file of two synthesised
 # campaigns (the defaults and the nonlinear actuator), and modelDescription.xml.
 # Usage: scripts/behaviour_check.sh DIR   then   diff -r BEFORE AFTER
-# About 12 minutes on 2 cores (the diagnosis suite dominates).
+# About 35 minutes on 2 cores (the hidden-effect diagnosis suite dominates, 28 minutes idle).
 set -euo pipefail
 ROOT="$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)"
 OUT="$(realpath -m "${1:?usage: scripts/behaviour_check.sh DIR}")"
