@@ -15,6 +15,7 @@ use super::starts::{informed_start, keep_each_frequency, starts};
 use crate::campaign::Campaign;
 use crate::identify::lsq::{minimise, LsqFit};
 use crate::params::Params;
+use rayon::prelude::*;
 
 /// Smallest share of the identified table mass a specimen's start leaves to the table
 /// when it takes its own mass out: the identified mass holds the specimen's, but a start
@@ -274,7 +275,8 @@ impl<'a> CandidateFit<'a> {
                 .map(|r| r.iter().map(|x| x * x).sum::<f64>())
                 .unwrap_or(f64::INFINITY)
         };
-        let mut scored: Vec<(f64, Start)> = all.into_iter().map(|s| (cost_of(&s), s)).collect();
+        let costs: Vec<f64> = all.par_iter().map(cost_of).collect();
+        let mut scored: Vec<(f64, Start)> = costs.into_iter().zip(all).collect();
         scored.sort_by(|a, b| a.0.total_cmp(&b.0));
         self.trace.say(&format!(
             "screened starts: {:?}",
@@ -349,9 +351,12 @@ impl<'a> CandidateFit<'a> {
                 .say(&format!("start from the data: {:?}", s.layout()));
             all.push(self.start_on(&self.bases[1], &s));
         }
+        // the starts fitted side by side (the cores a search's other effects leave idle
+        // at its end), then judged in their order: the same fit whatever the threads
+        let fits: Vec<Option<LsqFit>> = all.par_iter().map(|s| self.fit_start(s)).collect();
         let mut best: Option<(LsqFit, Params)> = None;
-        for start in all {
-            if let Some(f) = self.fit_start(&start) {
+        for (start, f) in all.into_iter().zip(fits) {
+            if let Some(f) = f {
                 if best.as_ref().map(|b| f.cost < b.0.cost).unwrap_or(true) {
                     best = Some((f, start.fixed));
                 }

@@ -28,12 +28,15 @@ const BASELINE_ITERATIONS: usize = 8;
 const MOTION_BASELINE_ITERATIONS: usize = 40;
 
 /// The least-squares settings of the candidates' fits: 12 iterations bring an effect's
-/// parameters from an informed start to its valley; the tolerances are relative.
+/// parameters from an informed start to its valley; the tolerances are relative. The
+/// Jacobian's columns are computed in parallel: a search's last fits run alone, and
+/// rayon lends them the cores the others left (each column is its own run, so the fit
+/// is the same whatever the threads).
 const CANDIDATE_LSQ: LsqOptions = LsqOptions {
     max_iterations: 12,
     tolerance: 1e-4,
     step: 1e-4,
-    parallel: false,
+    parallel: true,
 };
 
 /// Screened starts of a candidate fitted in full (besides the one read off the data): the
