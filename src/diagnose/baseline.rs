@@ -492,7 +492,9 @@ pub(super) fn refine_output_error(
             max_iterations: iterations,
             tolerance: REFINEMENT_TOLERANCE,
             step: REFINEMENT_STEP,
-            parallel: false,
+            // columns side by side: a polish runs alone (each column is its own run, so
+            // the fit is the same whatever the threads)
+            parallel: true,
         },
     )?;
     let ne = e.start.len();

@@ -277,13 +277,10 @@ fn table_tfs(c: &Campaign, d: &Diagnosis, i: usize) -> Option<[FrfEstimate; 3]> 
 /// The summary: the causes, the gain, the baseline's structure and noise floor, the rule.
 fn write_summary(html: &mut String, md: &mut String, c: &Campaign, d: &Diagnosis, cause: &str) {
     // a channel no test recorded has no floor
-    let level = |x: Option<f64>, unit: &str| {
-        x.map_or("not recorded".to_string(), |x| format!("{x:.3e}{unit}"))
-    };
-    let force = d
-        .noise
-        .force_n
-        .map_or("not recorded".to_string(), |x| format!("{x:.1} N"));
+    let level =
+        |x: Option<f64>, show: &dyn Fn(f64) -> String| x.map_or("not recorded".to_string(), show);
+    let sci = |unit: &'static str| move |x: f64| format!("{x:.3e}{unit}");
+    let force = level(d.noise.force_n, &|x| format!("{x:.1} N"));
     let _ = write!(
         html,
         "<h1>Diagnosis of {}</h1><p><b>Cause: {cause}</b>, gain {:.2} on the report quarter (data no fit or decision saw), explained: {}.</p>\
@@ -298,10 +295,10 @@ fn write_summary(html: &mut String, md: &mut String, c: &Campaign, d: &Diagnosis
         d.actuator_costs[0],
         d.actuator_costs[1],
         d.noise.method,
-        level(d.noise.displacement_m, " m"),
-        level(d.noise.acceleration_m_s2, " m/s^2"),
-        level(d.noise.spool, ""),
-        level(d.noise.valve_command, ""),
+        level(d.noise.displacement_m, &sci(" m")),
+        level(d.noise.acceleration_m_s2, &sci(" m/s^2")),
+        level(d.noise.spool, &sci("")),
+        level(d.noise.valve_command, &sci("")),
         d.structure_change()
             .map(|s| format!("<p>Note: {}.</p>", escape_html(&s)))
             .unwrap_or_default(),
