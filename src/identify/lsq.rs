@@ -477,6 +477,61 @@ mod tests {
         );
     }
 
+    /// The diagnosis fits with parallel Jacobian columns and relies on the result being
+    /// the same whatever the threads (its outputs are compared byte for byte): the fit
+    /// with columns in parallel, on one thread and on four, is bit for bit the
+    /// sequential one.
+    #[test]
+    fn parallel_columns_give_the_sequential_fit_bit_for_bit() {
+        let t: Vec<f64> = (0..200).map(|i| i as f64 * 0.05).collect();
+        let y: Vec<f64> = t
+            .iter()
+            .map(|t| 2.0 * (-0.3 * t).exp() * (4.0 * t).cos() + 0.01 * (17.0 * t).sin())
+            .collect();
+        let fit = |parallel: bool| {
+            minimise(
+                |p| {
+                    Some(
+                        t.iter()
+                            .zip(&y)
+                            .map(|(t, y)| p[0] * (-p[1] * t).exp() * (p[2] * t).cos() - y)
+                            .collect(),
+                    )
+                },
+                &[1.0, 0.5, 3.8],
+                &[0.0, 0.0, 0.0],
+                &[10.0, 10.0, 10.0],
+                &[1.0, 1.0, 1.0],
+                LsqOptions {
+                    parallel,
+                    ..LsqOptions::default()
+                },
+            )
+            .unwrap()
+        };
+        let bits = |f: &LsqFit| {
+            let mut v: Vec<u64> = f.theta.iter().map(|x| x.to_bits()).collect();
+            v.extend(f.sigma.iter().map(|x| x.to_bits()));
+            v.push(f.cost.to_bits());
+            v
+        };
+        let sequential = fit(false);
+        assert!(
+            (sequential.theta[2] - 4.0).abs() < 1e-3,
+            "{:?}",
+            sequential.theta
+        );
+        for threads in [1, 4] {
+            let pool = rayon::ThreadPoolBuilder::new()
+                .num_threads(threads)
+                .build()
+                .unwrap();
+            let parallel = pool.install(|| fit(true));
+            assert_eq!(bits(&parallel), bits(&sequential), "{threads} threads");
+            assert_eq!(parallel.iterations, sequential.iterations);
+        }
+    }
+
     #[test]
     fn bounds_hold() {
         let f = minimise(
