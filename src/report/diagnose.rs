@@ -274,13 +274,15 @@ fn table_tfs(c: &Campaign, d: &Diagnosis, i: usize) -> Option<[FrfEstimate; 3]> 
     Some([m, b, e])
 }
 
+/// A noise level as `show` writes it, or "not recorded" for a channel no test recorded
+/// (it has no floor).
+fn level(x: Option<f64>, show: impl Fn(f64) -> String) -> String {
+    x.map_or_else(|| "not recorded".to_string(), show)
+}
+
 /// The summary: the causes, the gain, the baseline's structure and noise floor, the rule.
 fn write_summary(html: &mut String, md: &mut String, c: &Campaign, d: &Diagnosis, cause: &str) {
-    // a channel no test recorded has no floor
-    let level =
-        |x: Option<f64>, show: &dyn Fn(f64) -> String| x.map_or("not recorded".to_string(), show);
-    let sci = |unit: &'static str| move |x: f64| format!("{x:.3e}{unit}");
-    let force = level(d.noise.force_n, &|x| format!("{x:.1} N"));
+    let force = level(d.noise.force_n, |x| format!("{x:.1} N"));
     let _ = write!(
         html,
         "<h1>Diagnosis of {}</h1><p><b>Cause: {cause}</b>, gain {:.2} on the report quarter (data no fit or decision saw), explained: {}.</p>\
@@ -295,10 +297,10 @@ fn write_summary(html: &mut String, md: &mut String, c: &Campaign, d: &Diagnosis
         d.actuator_costs[0],
         d.actuator_costs[1],
         d.noise.method,
-        level(d.noise.displacement_m, &sci(" m")),
-        level(d.noise.acceleration_m_s2, &sci(" m/s^2")),
-        level(d.noise.spool, &sci("")),
-        level(d.noise.valve_command, &sci("")),
+        level(d.noise.displacement_m, |x| format!("{x:.3e} m")),
+        level(d.noise.acceleration_m_s2, |x| format!("{x:.3e} m/s^2")),
+        level(d.noise.spool, |x| format!("{x:.3e}")),
+        level(d.noise.valve_command, |x| format!("{x:.3e}")),
         d.structure_change()
             .map(|s| format!("<p>Note: {}.</p>", escape_html(&s)))
             .unwrap_or_default(),
