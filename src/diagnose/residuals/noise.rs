@@ -182,9 +182,8 @@ pub fn estimate_noise(c: &Campaign) -> NoiseFloor {
         spool: floor(Spool, sensor[Spool]),
         valve_command: Some(
             floor(ValveCommand, command_from_gains(c, &sensor))
-                .map_or(lower_bound::VALVE_COMMAND, |x| {
-                    x.max(lower_bound::VALVE_COMMAND)
-                }),
+                .unwrap_or(lower_bound::VALVE_COMMAND)
+                .max(lower_bound::VALVE_COMMAND),
         ),
         sensor: SensorLevels {
             displacement_m: sensor[Displacement],
