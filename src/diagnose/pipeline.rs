@@ -247,7 +247,9 @@ impl Diagnoser<'_> {
 
     /// One search on top of `current` with the effects not yet accepted: every candidate
     /// fitted, the best polished. Returns the candidates (the best one polished) and the
-    /// index of the best, `None` when no cell is missed or no candidate could be fitted.
+    /// index of the best, `None` when no cell is missed, when a later search would look
+    /// for a cause of cells that all count as explained
+    /// ([`Missed::unexplained_remains`]), or when no candidate could be fitted.
     fn search(
         &self,
         current: &Current,
@@ -255,7 +257,9 @@ impl Diagnoser<'_> {
         round: usize,
     ) -> Option<(Vec<Candidate>, usize, Missed)> {
         let missed = Missed::of(&current.select.residual);
-        if !missed.any || effects.is_empty() {
+        // a further cause only for a cell `explained` would not count as explained
+        let further = round == 0 || Missed::unexplained_remains(&current.select.residual);
+        if !missed.any || !further || effects.is_empty() {
             return None;
         }
         let hold = current.hold();

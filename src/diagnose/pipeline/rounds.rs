@@ -309,7 +309,7 @@ impl<'a> Diagnoser<'a> {
     }
 
     /// Searches on top of `current` until no candidate passes ([`verdict`]), no cell is
-    /// missed or [`MAX_CAUSES`] are accepted. Every effect not yet accepted is fitted
+    /// missed (after a cause: none is unexplained) or [`MAX_CAUSES`] are accepted. Every effect not yet accepted is fitted
     /// again in each search: a second effect's first candidate may not beat the baseline
     /// at all while the dominant effect is missing (a specimen's fit with a deadband
     /// unmodelled ends at its damping bound; stick-slip's with a specimen unmodelled does
@@ -416,7 +416,7 @@ impl<'a> Diagnoser<'a> {
         round: usize,
         earlier: &mut [Cause],
     ) -> (Cause, Current) {
-        let best = if round + 1 < MAX_CAUSES && Missed::of(&best.select.residual).any {
+        let best = if round + 1 < MAX_CAUSES && Missed::unexplained_remains(&best.select.residual) {
             self.settle(best, missed, &current.hold())
         } else {
             best
