@@ -14,7 +14,7 @@ use super::output::{Candidate, PartRows};
 use super::part::Part;
 use super::residuals::{CellScores, Cells, NoiseFloor, Whitening};
 use super::starts::informed_start;
-use super::stick_slip::fit_stick_slip;
+use super::stick_slip::{fit_stick_slip, polish_wide};
 use super::{residuals, trace_enabled};
 use crate::campaign::Campaign;
 use crate::params::Params;
@@ -173,6 +173,37 @@ fn fit_on_score(
             values: &fit.values,
             sigma: None,
             bounds: &e.bounds(&bases[0]),
+            fit_residual: fit.score.sqrt(),
+            params: fit.params,
+        },
+        ctx.heldout_idx,
+        ctx.noise,
+        ctx.hold,
+    ))
+}
+
+/// A stick-slip candidate `cand` polished on the predictive score with the friction
+/// shape its output-error unbending bent ([`polish_wide`]), on its
+/// signature tests under the table `table`, scored on the held-out quarters; `None` for
+/// the other effects and when the polish gains nothing on the fit's score.
+pub(super) fn polish_on_score(
+    cand: &Candidate,
+    table: &Params,
+    ctx: &FitContext,
+) -> Option<Candidate> {
+    let e = cand.effect;
+    if e.row().fit != FitKind::StickSlip {
+        return None;
+    }
+    let sig = fitted_tests(e, ctx.c, table, ctx.fit_idx)?;
+    let fit = polish_wide(&cand.params, &sig, ctx.c, ctx.noise)?;
+    Some(scored_candidate(
+        e,
+        ctx.c,
+        Fitted {
+            values: &fit.values,
+            sigma: None,
+            bounds: &e.bounds(table),
             fit_residual: fit.score.sqrt(),
             params: fit.params,
         },

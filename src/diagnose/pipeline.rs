@@ -181,7 +181,15 @@ impl Diagnoser<'_> {
         missed: &Missed,
         hold: &Hold,
     ) -> Option<Candidate> {
-        let ctx = FitContext {
+        let mut cand = fit_candidate(e, bases, &self.context(hold))?;
+        self.summarise(&mut cand, missed);
+        Some(cand)
+    }
+
+    /// What a candidate's fit works on: every test's fitting half, its held-out quarters
+    /// scored with `hold`.
+    fn context<'b>(&'b self, hold: &'b Hold<'b>) -> FitContext<'b> {
+        FitContext {
             c: self.c,
             fit_idx: &self.tests,
             heldout_idx: &self.tests,
@@ -189,12 +197,15 @@ impl Diagnoser<'_> {
             effort: self.effort,
             whitening: &self.whitening,
             hold,
-        };
-        let mut cand = fit_candidate(e, bases, &ctx)?;
+        }
+    }
+
+    /// `cand`'s figures on the selection quarter's cells `missed` and the report
+    /// quarter's cells the baseline misses ([`Candidate::summarise`]).
+    fn summarise(&self, cand: &mut Candidate, missed: &Missed) {
         cand.summarise(&|rows| missed.rms(rows), &|rows| {
             self.report_missed.rms(rows)
         });
-        Some(cand)
     }
 
     /// A specimen candidate with its further modes (spec section 7, second part): the

@@ -251,55 +251,138 @@ fn polish_stick_slip(
     start: StickSlipPoint,
     bounds: &EffectBounds,
 ) -> Option<ScoreFit> {
-    use argmin::core::{CostFunction, Executor};
-    use argmin::solver::neldermead::NelderMead;
-    // the simplex coordinates -> the point
-    fn point(x: &[f64]) -> StickSlipPoint {
-        StickSlipPoint {
-            static_ratio: 1.0 + x[0].exp(),
-            stribeck_velocity_m_s: x[1].exp(),
-            friction_n: x[2].exp(),
+    let point = |x: &[f64]| StickSlipPoint {
+        static_ratio: 1.0 + x[0].exp(),
+        stribeck_velocity_m_s: x[1].exp(),
+        friction_n: x[2].exp(),
+    };
+    let cost = |x: &[f64]| {
+        let at = point(x);
+        if within(bounds, &at) {
+            eval.eval(at).score
+        } else {
+            f64::INFINITY
         }
-    }
-    struct Score<'a, 'b>(&'a StickSlipScore<'b>, &'a EffectBounds);
-    impl CostFunction for Score<'_, '_> {
-        type Param = Vec<f64>;
-        type Output = f64;
-        fn cost(&self, x: &Vec<f64>) -> Result<f64, argmin::core::Error> {
-            let at = point(x);
-            let (lower, upper) = (&self.1.lower, &self.1.upper);
-            let (ratio, speed) = ("static_ratio", "stribeck_velocity_m_s");
-            if !((lower.get(ratio)..=upper.get(ratio)).contains(&at.static_ratio)
-                && (lower.get(speed)..=upper.get(speed)).contains(&at.stribeck_velocity_m_s))
-            {
-                return Ok(f64::INFINITY);
-            }
-            Ok(self.0.eval(at).score)
-        }
-    }
+    };
     let first = eval.eval(start);
     let x0 = vec![
         (start.static_ratio - 1.0).ln(),
         start.stribeck_velocity_m_s.ln(),
         start.friction_n.ln(),
     ];
-    let mut simplex = vec![x0.clone()];
-    for (k, h) in POLISH_STEPS.iter().enumerate() {
-        let mut x = x0.clone();
-        x[k] += h;
-        simplex.push(x);
-    }
-    let solver = NelderMead::new(simplex)
-        .with_sd_tolerance(POLISH_SPREAD_TOLERANCE * first.score)
-        .ok()?;
-    let best = Executor::new(Score(eval, bounds), solver)
-        .configure(|s| s.max_iters(POLISH_ITERATIONS))
-        .run()
-        .ok()
-        .and_then(|r| r.state.best_param)
+    let best = nelder_mead(cost, x0, &POLISH_STEPS, first.score, POLISH_ITERATIONS)
         .map(|x| eval.eval(point(&x)));
     match best {
         Some(b) if b.score < first.score => Some(b),
         _ => Some(first),
     }
+}
+
+/// Whether `at`'s static ratio and Stribeck velocity lie within the effect's fitting
+/// `bounds`.
+fn within(bounds: &EffectBounds, at: &StickSlipPoint) -> bool {
+    let (lower, upper) = (&bounds.lower, &bounds.upper);
+    let (ratio, speed) = ("static_ratio", "stribeck_velocity_m_s");
+    (lower.get(ratio)..=upper.get(ratio)).contains(&at.static_ratio)
+        && (lower.get(speed)..=upper.get(speed)).contains(&at.stribeck_velocity_m_s)
+}
+
+/// Argmin's Nelder-Mead on `cost` from `x0`, the initial simplex stepping each coordinate
+/// by `steps`; it stops when the simplex's costs spread by less than
+/// [`POLISH_SPREAD_TOLERANCE`] of `start_score`, or after `iterations`. The best point seen.
+fn nelder_mead(
+    cost: impl Fn(&[f64]) -> f64,
+    x0: Vec<f64>,
+    steps: &[f64],
+    start_score: f64,
+    iterations: u64,
+) -> Option<Vec<f64>> {
+    use argmin::core::{CostFunction, Executor};
+    use argmin::solver::neldermead::NelderMead;
+    struct Cost<F>(F);
+    impl<F: Fn(&[f64]) -> f64> CostFunction for Cost<F> {
+        type Param = Vec<f64>;
+        type Output = f64;
+        fn cost(&self, x: &Vec<f64>) -> Result<f64, argmin::core::Error> {
+            Ok((self.0)(x))
+        }
+    }
+    let mut simplex = vec![x0.clone()];
+    for (k, h) in steps.iter().enumerate() {
+        let mut x = x0.clone();
+        x[k] += h;
+        simplex.push(x);
+    }
+    let solver = NelderMead::new(simplex)
+        .with_sd_tolerance(POLISH_SPREAD_TOLERANCE * start_score)
+        .ok()?;
+    Executor::new(Cost(cost), solver)
+        .configure(|s| s.max_iters(iterations))
+        .run()
+        .ok()
+        .and_then(|r| r.state.best_param)
+}
+
+/// The wide polish's initial simplex step of the friction shape: 0.05 of its 0-1 range.
+const SHAPE_STEP: f64 = 0.05;
+/// Nelder-Mead iterations of the wide polish: four coordinates settle in a few dozen.
+const WIDE_ITERATIONS: u64 = 60;
+
+/// Stick-slip polished on the score together with the friction shape, the baseline
+/// parameter its output-error unbending bends most. The chatter has no reproducible
+/// phase, so an output-error fit of the baseline beside it is biased (seed 454: the
+/// unbending left the shape at 0.39 for 0.5, which the fitting halves barely see but the
+/// stop at the end of each slow triangle does, at 3-4 noise RMS in the force); the score
+/// is not. The table mass, which the unbending bent by 0.14 %, stays: the slow signature
+/// tests barely see it (freed, it walked 0.3 % further off and the fast sines' force
+/// missed by 7 noise RMS). `fit` is the stick-slip fit to polish, on its signature
+/// tests `sig`.
+pub(super) fn polish_wide(
+    fit: &Params,
+    sig: &[usize],
+    c: &Campaign,
+    noise: &NoiseFloor,
+) -> Option<ScoreFit> {
+    let eval = StickSlipScore {
+        base: *fit,
+        c,
+        sig,
+        noise,
+    };
+    let bounds = Effect::of(&crate::effects::stick_slip::EFFECT).bounds(fit);
+    let point = |x: &[f64]| StickSlipPoint {
+        static_ratio: 1.0 + x[0].exp(),
+        stribeck_velocity_m_s: x[1].exp(),
+        friction_n: x[2].exp(),
+    };
+    let shaped = |x: &[f64]| {
+        let mut base = *fit;
+        base.friction.shape = x[3];
+        StickSlipScore { base, ..eval }
+    };
+    let cost = |x: &[f64]| {
+        let at = point(x);
+        if within(&bounds, &at) {
+            shaped(x).eval(at).score
+        } else {
+            f64::INFINITY
+        }
+    };
+    let s = &fit.stick_slip;
+    let x0 = vec![
+        (s.static_ratio - 1.0).ln(),
+        s.stribeck_velocity_m_s.ln(),
+        fit.friction.force_n.ln(),
+        fit.friction.shape,
+    ];
+    let steps = [
+        POLISH_STEPS[0],
+        POLISH_STEPS[1],
+        POLISH_STEPS[2],
+        SHAPE_STEP,
+    ];
+    let first = cost(&x0);
+    let x = nelder_mead(cost, x0, &steps, first, WIDE_ITERATIONS)?;
+    let best = shaped(&x).eval(point(&x));
+    (best.score < first).then_some(best)
 }

@@ -5,12 +5,12 @@
 
 use super::Diagnoser;
 use crate::diagnose::baseline::{refine_output_error, FreedFit, Refined};
-use crate::diagnose::candidates::{scored_candidate, Fitted, Hold};
+use crate::diagnose::candidates::{polish_on_score, scored_candidate, Fitted, Hold};
 use crate::diagnose::effect::Effect;
 use crate::diagnose::effect_values::{EffectBounds, EffectValues};
 use crate::diagnose::missed::Missed;
 use crate::diagnose::output::Candidate;
-use crate::diagnose::EXPLAINED_RATIO;
+use crate::diagnose::{trace_enabled, EXPLAINED_RATIO};
 use crate::params::{ActuatorModel, Params};
 
 /// A further polish round is taken only when the previous one cut the score by at least
@@ -157,9 +157,7 @@ impl Diagnoser<'_> {
             &self.noise,
             hold,
         );
-        polished.summarise(&|rows| missed.rms(rows), &|rows| {
-            self.report_missed.rms(rows)
-        });
+        self.summarise(&mut polished, missed);
         polished.refitted_sigma = split.refitted_sigma;
         polished
     }
@@ -199,7 +197,30 @@ impl Diagnoser<'_> {
                 None => break,
             }
         }
+        // stick-slip's own parameters with the baseline's that the output error bends
+        // beside its chatter, on the score
+        if let Some(p) = better(self.polish_on_score(&best, missed, hold), &best) {
+            best = p;
+        }
         best
+    }
+
+    /// [`polish_on_score`] of `cand` (stick-slip only), summarised on the cells `missed`.
+    fn polish_on_score(&self, cand: &Candidate, missed: &Missed, hold: &Hold) -> Option<Candidate> {
+        let mut polished = polish_on_score(cand, &self.table, &self.context(hold))?;
+        self.summarise(&mut polished, missed);
+        if trace_enabled() {
+            eprintln!(
+                "  {} polished on the score with the friction shape: score {:.4} (was {:.4}), \
+                 {:?}, shape {:.4}",
+                cand.effect.name(),
+                polished.score,
+                cand.score,
+                polished.parameters,
+                polished.params.friction.shape
+            );
+        }
+        Some(polished)
     }
 
     /// An accepted cause polished until a round gains less than [`POLISH_MIN_IMPROVEMENT`]
