@@ -251,11 +251,6 @@ fn polish_stick_slip(
     start: StickSlipPoint,
     bounds: &EffectBounds,
 ) -> Option<ScoreFit> {
-    let point = |x: &[f64]| StickSlipPoint {
-        static_ratio: 1.0 + x[0].exp(),
-        stribeck_velocity_m_s: x[1].exp(),
-        friction_n: x[2].exp(),
-    };
     let cost = |x: &[f64]| {
         let at = point(x);
         if within(bounds, &at) {
@@ -275,6 +270,16 @@ fn polish_stick_slip(
     match best {
         Some(b) if b.score < first.score => Some(b),
         _ => Some(first),
+    }
+}
+
+/// The point at the polish's simplex coordinates `x`: `(ln(r_s - 1), ln v_s, ln F_mu)`
+/// first.
+fn point(x: &[f64]) -> StickSlipPoint {
+    StickSlipPoint {
+        static_ratio: 1.0 + x[0].exp(),
+        stribeck_velocity_m_s: x[1].exp(),
+        friction_n: x[2].exp(),
     }
 }
 
@@ -350,11 +355,6 @@ pub(super) fn polish_wide(
         noise,
     };
     let bounds = Effect::of(&crate::effects::stick_slip::EFFECT).bounds(fit);
-    let point = |x: &[f64]| StickSlipPoint {
-        static_ratio: 1.0 + x[0].exp(),
-        stribeck_velocity_m_s: x[1].exp(),
-        friction_n: x[2].exp(),
-    };
     let shaped = |x: &[f64]| {
         let mut base = *fit;
         base.friction.shape = x[3];
