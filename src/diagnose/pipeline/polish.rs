@@ -167,8 +167,9 @@ impl Diagnoser<'_> {
     /// first; while that leaves the selection quarter unexplained the other variant too
     /// (a missing effect can tip the baseline's choice: a deadband on the ideal actuator
     /// fits better as a nonlinear one), then further rounds while unexplained and
-    /// improving (a heavily saturated table bends the baseline by tens of percent). Every
-    /// decision here reads the selection quarter only.
+    /// improving (a heavily saturated table bends the baseline by tens of percent); last,
+    /// a stick-slip candidate polished on the score with the friction shape
+    /// ([`polish_on_score`]). Every decision here reads the selection quarter only.
     pub(super) fn polish_best(&self, cand: &Candidate, missed: &Missed, hold: &Hold) -> Candidate {
         let better = |a: Option<Candidate>, b: &Candidate| a.filter(|a| a.score < b.score);
         let own = cand.params.actuator.model;
