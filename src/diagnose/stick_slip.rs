@@ -251,20 +251,9 @@ fn polish_stick_slip(
     start: StickSlipPoint,
     bounds: &EffectBounds,
 ) -> Option<ScoreFit> {
-    let cost = |x: &[f64]| {
-        let at = point(x);
-        if within(bounds, &at) {
-            eval.eval(at).score
-        } else {
-            f64::INFINITY
-        }
-    };
+    let cost = |x: &[f64]| score_within(eval, bounds, point(x));
     let first = eval.eval(start);
-    let x0 = vec![
-        (start.static_ratio - 1.0).ln(),
-        start.stribeck_velocity_m_s.ln(),
-        start.friction_n.ln(),
-    ];
+    let x0 = coordinates(start).to_vec();
     let best = nelder_mead(cost, x0, &POLISH_STEPS, first.score, POLISH_ITERATIONS)
         .map(|x| eval.eval(point(&x)));
     match best {
@@ -283,13 +272,27 @@ fn point(x: &[f64]) -> StickSlipPoint {
     }
 }
 
-/// Whether `at`'s static ratio and Stribeck velocity lie within the effect's fitting
-/// `bounds`.
-fn within(bounds: &EffectBounds, at: &StickSlipPoint) -> bool {
+/// The simplex coordinates of `at` (the inverse of [`point`]).
+fn coordinates(at: StickSlipPoint) -> [f64; 3] {
+    [
+        (at.static_ratio - 1.0).ln(),
+        at.stribeck_velocity_m_s.ln(),
+        at.friction_n.ln(),
+    ]
+}
+
+/// The score of `at` under `eval`, infinite when its static ratio or Stribeck velocity
+/// lies outside the effect's fitting `bounds`.
+fn score_within(eval: &StickSlipScore, bounds: &EffectBounds, at: StickSlipPoint) -> f64 {
     let (lower, upper) = (&bounds.lower, &bounds.upper);
     let (ratio, speed) = ("static_ratio", "stribeck_velocity_m_s");
-    (lower.get(ratio)..=upper.get(ratio)).contains(&at.static_ratio)
+    if (lower.get(ratio)..=upper.get(ratio)).contains(&at.static_ratio)
         && (lower.get(speed)..=upper.get(speed)).contains(&at.stribeck_velocity_m_s)
+    {
+        eval.eval(at).score
+    } else {
+        f64::INFINITY
+    }
 }
 
 /// Argmin's Nelder-Mead on `cost` from `x0`, the initial simplex stepping each coordinate
@@ -348,33 +351,27 @@ pub(super) fn polish_wide(
     c: &Campaign,
     noise: &NoiseFloor,
 ) -> Option<ScoreFit> {
-    let eval = StickSlipScore {
-        base: *fit,
-        c,
-        sig,
-        noise,
-    };
     let bounds = Effect::of(&crate::effects::stick_slip::EFFECT).bounds(fit);
     let shaped = |x: &[f64]| {
         let mut base = *fit;
         base.friction.shape = x[3];
-        StickSlipScore { base, ..eval }
-    };
-    let cost = |x: &[f64]| {
-        let at = point(x);
-        if within(&bounds, &at) {
-            shaped(x).eval(at).score
-        } else {
-            f64::INFINITY
+        StickSlipScore {
+            base,
+            c,
+            sig,
+            noise,
         }
     };
-    let s = &fit.stick_slip;
-    let x0 = vec![
-        (s.static_ratio - 1.0).ln(),
-        s.stribeck_velocity_m_s.ln(),
-        fit.friction.force_n.ln(),
-        fit.friction.shape,
-    ];
+    let cost = |x: &[f64]| score_within(&shaped(x), &bounds, point(x));
+    let start = StickSlipPoint {
+        static_ratio: fit.stick_slip.static_ratio,
+        stribeck_velocity_m_s: fit.stick_slip.stribeck_velocity_m_s,
+        friction_n: fit.friction.force_n,
+    };
+    let x0: Vec<f64> = coordinates(start)
+        .into_iter()
+        .chain([fit.friction.shape])
+        .collect();
     let steps = [
         POLISH_STEPS[0],
         POLISH_STEPS[1],

@@ -309,11 +309,11 @@ impl<'a> Diagnoser<'a> {
     }
 
     /// Searches on top of `current` until no candidate passes ([`verdict`]), no cell is
-    /// missed (after a cause: none is unexplained) or [`MAX_CAUSES`] are accepted. Every effect not yet accepted is fitted
-    /// again in each search: a second effect's first candidate may not beat the baseline
-    /// at all while the dominant effect is missing (a specimen's fit with a deadband
-    /// unmodelled ends at its damping bound; stick-slip's with a specimen unmodelled does
-    /// not improve the baseline).
+    /// missed (after a cause: none is unexplained) or [`MAX_CAUSES`] are accepted. Every
+    /// effect not yet accepted is fitted again in each search: a second effect's first
+    /// candidate may not beat the baseline at all while the dominant effect is missing (a
+    /// specimen's fit with a deadband unmodelled ends at its damping bound; stick-slip's
+    /// with a specimen unmodelled does not improve the baseline).
     fn search_causes(&self, current: Current) -> Found {
         let table_mass_kg = self.table.table.mass_kg;
         let baseline_report = self.report_missed.rms(&current.report.residual);
