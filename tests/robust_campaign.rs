@@ -272,3 +272,20 @@ fn cli_exit_codes() {
     let err = String::from_utf8_lossy(&o.stderr);
     assert!(err.contains("S3.csv"), "{err}");
 }
+
+/// A corruption that stops the refined baseline's run in a report quarter (R1's spool
+/// channel a thousandfold: found by the property test above in CI) leaves no gain to
+/// measure, so no cause is named, and the diagnosis says why, naming the stopped run.
+#[test]
+fn a_baseline_stopped_in_the_report_quarter_names_no_cause() {
+    let mut c = base().clone();
+    apply(&mut c, &Mutation::Scale(0, 6, 3));
+    let d = shaketable::diagnose::diagnose(&c, shaketable::diagnose::Effort::Full, None).unwrap();
+    assert!(!d.baseline_heldout.is_finite(), "{}", d.baseline_heldout);
+    assert!(d.cause().is_none() && d.causes.is_empty());
+    let why = d.baseline_unscorable.as_deref().unwrap_or_default();
+    assert!(
+        why.contains("report quarter") && why.contains("stopped"),
+        "{why}"
+    );
+}

@@ -126,7 +126,8 @@ impl Diagnoser<'_> {
         self.report_missed = Missed::of(&report.residual);
         let heldout = self.report_missed.rms(&report.residual);
         let score = Missed::of(&select.residual).rms(&select.score);
-        let unscorable = unscorable(&base, c, &select.residual);
+        let unscorable =
+            unscorable(&base, c, &select.residual).or_else(|| unmeasurable_gain(&base, c, heldout));
         Baseline {
             params: base,
             actuator_costs,
@@ -244,24 +245,42 @@ fn unscorable(base: &Params, c: &Campaign, select: &[Cells]) -> Option<String> {
     if scored {
         return None;
     }
-    let why = (0..c.records.len())
-        .find_map(|i| {
-            simulate_test(base, c, i, Part::Select)
-                .err()
-                .map(|e| (i, e))
-        })
-        .map(|(i, e)| {
-            format!(
-                "its run of {} stopped at t = {:.3} s: {}",
-                c.info.tests[i].name, e.time_s, e.reason
-            )
-        })
+    let why = first_stop(base, c, Part::Select)
         .unwrap_or_else(|| "no test has a recorded channel it can be compared on".into());
     Some(format!(
         "the refined baseline could not be scored on any test ({why}): no candidate can \
          be measured against it, so no cause is named; check what `identify` gives for \
          this campaign"
     ))
+}
+
+/// Why no gain can be measured against the baseline `base`, when none can: its residual
+/// `heldout` on the report quarter is not finite because a run stopped there (a campaign
+/// with R1's spool channel scaled a thousandfold had its baseline stop in R1's report
+/// quarter and flow saturation named with no finite gain). A cause is claimed only with
+/// a measured gain (issue 17, part 3), so no search runs. Names the first stopped run.
+fn unmeasurable_gain(base: &Params, c: &Campaign, heldout: f64) -> Option<String> {
+    if heldout.is_finite() {
+        return None;
+    }
+    let why = first_stop(base, c, Part::Report)
+        .unwrap_or_else(|| "its residual there is not finite".into());
+    Some(format!(
+        "the refined baseline could not be scored on the report quarter ({why}): no gain \
+         can be measured against it, so no cause is named; check what `identify` gives \
+         for this campaign"
+    ))
+}
+
+/// The first test whose run of `base` stops in `part`, and where and why.
+fn first_stop(base: &Params, c: &Campaign, part: Part) -> Option<String> {
+    (0..c.records.len()).find_map(|i| {
+        let e = simulate_test(base, c, i, part).err()?;
+        Some(format!(
+            "its run of {} stopped at t = {:.3} s: {}",
+            c.info.tests[i].name, e.time_s, e.reason
+        ))
+    })
 }
 
 impl<'a> Diagnoser<'a> {
