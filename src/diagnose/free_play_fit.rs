@@ -9,6 +9,7 @@ use super::effect::Effect;
 use super::effect_values::{EffectBounds, EffectValues};
 use super::part::Part;
 use super::residuals;
+use super::simplex;
 use super::stick_slip::{UNBENDING_ITERATIONS, UNBENDING_ROUNDS};
 use crate::params::Params;
 
@@ -277,37 +278,14 @@ impl<'a> PlayFit<'a> {
     }
 }
 
-/// Nelder-Mead (argmin) over the logs of `x0`'s entries with [`STEPS`]; the best point
+/// [`simplex::nelder_mead`] over the logs of `x0`'s entries with [`STEPS`]; the best point
 /// and its score, or None when argmin fails.
 fn nelder_mead(score: &dyn Fn(&[f64]) -> f64, x0: &[f64], first: f64) -> Option<(Vec<f64>, f64)> {
-    use argmin::core::{CostFunction, Executor};
-    use argmin::solver::neldermead::NelderMead;
-    struct Score<'a>(&'a dyn Fn(&[f64]) -> f64);
-    impl CostFunction for Score<'_> {
-        type Param = Vec<f64>;
-        type Output = f64;
-        fn cost(&self, y: &Vec<f64>) -> Result<f64, argmin::core::Error> {
-            let x: Vec<f64> = y.iter().map(|v| v.exp()).collect();
-            Ok((self.0)(&x))
-        }
-    }
+    let exp = |y: &[f64]| y.iter().map(|v| v.exp()).collect::<Vec<f64>>();
     let y0: Vec<f64> = x0.iter().map(|v| v.max(f64::MIN_POSITIVE).ln()).collect();
-    let mut simplex = vec![y0.clone()];
-    for (k, h) in STEPS.iter().enumerate() {
-        let mut y = y0.clone();
-        y[k] += h;
-        simplex.push(y);
-    }
-    let solver = NelderMead::new(simplex)
-        .with_sd_tolerance(1e-4 * first)
-        .ok()?;
-    let state = Executor::new(Score(score), solver)
-        .configure(|s| s.max_iters(MAX_ITERATIONS))
-        .run()
-        .ok()?
-        .state;
-    let y = state.best_param?;
-    Some((y.iter().map(|v| v.exp()).collect(), state.best_cost))
+    let cost = |y: &[f64]| score(&exp(y));
+    let (y, s) = simplex::nelder_mead(cost, &y0, &STEPS, 1e-4 * first, MAX_ITERATIONS)?;
+    Some((exp(&y), s))
 }
 
 #[cfg(test)]

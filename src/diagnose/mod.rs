@@ -63,6 +63,7 @@ mod output;
 mod part;
 mod pipeline;
 pub mod residuals;
+mod simplex;
 mod specimen_modes;
 mod starts;
 mod stick_slip;

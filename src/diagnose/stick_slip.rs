@@ -7,6 +7,7 @@ use super::effect::Effect;
 use super::effect_values::{EffectBounds, EffectValues};
 use super::part::Part;
 use super::residuals::{self, NoiseFloor};
+use super::simplex;
 use super::stribeck::{self, CurveFit};
 use crate::campaign::Campaign;
 use crate::params::Params;
@@ -295,9 +296,8 @@ fn score_within(eval: &StickSlipScore, bounds: &EffectBounds, at: StickSlipPoint
     }
 }
 
-/// Argmin's Nelder-Mead on `cost` from `x0`, the initial simplex stepping each coordinate
-/// by `steps`; it stops when the simplex's costs spread by less than
-/// [`POLISH_SPREAD_TOLERANCE`] of `start_score`, or after `iterations`. The best point seen.
+/// [`simplex::nelder_mead`] on `cost` from `x0`, stopping when the simplex's costs spread
+/// by less than [`POLISH_SPREAD_TOLERANCE`] of `start_score`: the best point seen.
 fn nelder_mead(
     cost: impl Fn(&[f64]) -> f64,
     x0: Vec<f64>,
@@ -305,30 +305,8 @@ fn nelder_mead(
     start_score: f64,
     iterations: u64,
 ) -> Option<Vec<f64>> {
-    use argmin::core::{CostFunction, Executor};
-    use argmin::solver::neldermead::NelderMead;
-    struct Cost<F>(F);
-    impl<F: Fn(&[f64]) -> f64> CostFunction for Cost<F> {
-        type Param = Vec<f64>;
-        type Output = f64;
-        fn cost(&self, x: &Vec<f64>) -> Result<f64, argmin::core::Error> {
-            Ok((self.0)(x))
-        }
-    }
-    let mut simplex = vec![x0.clone()];
-    for (k, h) in steps.iter().enumerate() {
-        let mut x = x0.clone();
-        x[k] += h;
-        simplex.push(x);
-    }
-    let solver = NelderMead::new(simplex)
-        .with_sd_tolerance(POLISH_SPREAD_TOLERANCE * start_score)
-        .ok()?;
-    Executor::new(Cost(cost), solver)
-        .configure(|s| s.max_iters(iterations))
-        .run()
-        .ok()
-        .and_then(|r| r.state.best_param)
+    let tolerance = POLISH_SPREAD_TOLERANCE * start_score;
+    simplex::nelder_mead(cost, &x0, steps, tolerance, iterations).map(|(x, _)| x)
 }
 
 /// The wide polish's initial simplex step of the friction shape: 0.05 of its 0-1 range.
