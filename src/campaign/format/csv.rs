@@ -64,13 +64,18 @@ fn cell_value(name: &str, c: &str, decimal: Decimal, buffer: &mut String) -> Res
     }
 }
 
+/// A record error at physical line `line` of `file`.
+fn csv_error(file: &str, line: usize, message: String) -> CampaignError {
+    CampaignError::Csv {
+        file: file.to_string(),
+        line,
+        message,
+    }
+}
+
 /// The header's column names (checked), or `1, 2, ...` for a file without one.
 fn header_names(cells: &[&str], line_no: usize, file: &str) -> Result<Vec<String>, CampaignError> {
-    let err = |message: String| CampaignError::Csv {
-        file: file.to_string(),
-        line: line_no,
-        message,
-    };
+    let err = |message: String| csv_error(file, line_no, message);
     let mut names: Vec<String> = Vec::new();
     for (j, cell) in cells.iter().enumerate() {
         let name = unquote(cell);
@@ -101,18 +106,32 @@ pub(super) fn parse_csv(
     opts: &ReadOptions,
     strict: bool,
 ) -> Result<CsvTable, CampaignError> {
-    let err = |line: usize, message: String| CampaignError::Csv {
-        file: file.to_string(),
-        line,
-        message,
-    };
-    let mut t = CsvTable {
-        names: Vec::new(),
-        columns: Vec::new(),
-        bad: Vec::new(),
-        header_line: 0,
-        row_lines: Vec::new(),
-    };
+    check_decimal_delimiter(opts, file)?;
+    // a UTF-8 byte-order mark (spreadsheet exports) is not part of the first channel name
+    let text = text.strip_prefix('\u{feff}').unwrap_or(text);
+    let mut reader = CsvReader::new(file, opts, strict, text.len());
+    for (i, line) in lines_any(text).enumerate() {
+        let line_no = i + 1;
+        let trimmed = line.trim_start();
+        if matches!(opts.header_line, Some(h) if line_no < h) || trimmed.is_empty() {
+            continue;
+        }
+        reader.last_line = line_no;
+        if !opts.comment.is_empty() && trimmed.starts_with(opts.comment.as_str()) {
+            continue;
+        }
+        let row = cells(line, opts);
+        if !reader.have_names && reader.first_row(&row, line, line_no)? {
+            continue;
+        }
+        reader.data_row(&row, line_no)?;
+    }
+    reader.finish()
+}
+
+/// `[read]` must not give a decimal comma with a comma delimiter: a number's comma
+/// could not be told from a cell separator.
+fn check_decimal_delimiter(opts: &ReadOptions, file: &str) -> Result<(), CampaignError> {
     if opts.decimal == Decimal::Comma && opts.delimiter == Delimiter::Char(',') {
         return Err(CampaignError::Invalid {
             file: file.to_string(),
@@ -122,60 +141,116 @@ pub(super) fn parse_csv(
                 .to_string(),
         });
     }
-    let mut have_names = false;
-    let mut last_line = 0usize;
-    let mut buffer = String::new();
-    // a UTF-8 byte-order mark (spreadsheet exports) is not part of the first channel name
-    let text = text.strip_prefix('\u{feff}').unwrap_or(text);
-    for (i, line) in lines_any(text).enumerate() {
-        let line_no = i + 1;
-        let trimmed = line.trim_start();
-        if matches!(opts.header_line, Some(h) if line_no < h) || trimmed.is_empty() {
-            continue;
+    Ok(())
+}
+
+/// A text record while [`parse_csv`] reads it, line by line: the table so far, whether
+/// its names are known, and the last line that is neither blank nor before the header.
+struct CsvReader<'a> {
+    file: &'a str,
+    opts: &'a ReadOptions,
+    strict: bool,
+    /// The length of the whole text (to size the columns from the header's length).
+    text_len: usize,
+    table: CsvTable,
+    have_names: bool,
+    last_line: usize,
+    /// One buffer for the decimal-comma rewrite of every cell.
+    buffer: String,
+}
+
+impl<'a> CsvReader<'a> {
+    fn new(file: &'a str, opts: &'a ReadOptions, strict: bool, text_len: usize) -> Self {
+        CsvReader {
+            file,
+            opts,
+            strict,
+            text_len,
+            table: CsvTable {
+                names: Vec::new(),
+                columns: Vec::new(),
+                bad: Vec::new(),
+                header_line: 0,
+                row_lines: Vec::new(),
+            },
+            have_names: false,
+            last_line: 0,
+            buffer: String::new(),
         }
-        last_line = line_no;
-        if !opts.comment.is_empty() && trimmed.starts_with(opts.comment.as_str()) {
-            continue;
-        }
-        let row = cells(line, opts);
-        if !have_names {
-            have_names = true;
-            if opts.header_line == Some(0) {
-                t.names = (1..=row.len()).map(|j| j.to_string()).collect();
-            } else {
-                t.header_line = line_no;
-                t.names = header_names(&row, line_no, file)?;
-                let cap = text.len() / (line.len() + 1).max(8);
-                t.columns = (0..t.names.len())
-                    .map(|_| Vec::with_capacity(cap))
-                    .collect();
-                t.bad = vec![None; t.names.len()];
-                continue;
-            }
+    }
+
+    /// The first row read names the columns: the header (checked; returns true, the row
+    /// holds no samples), or, with `header_line = 0`, `1, 2, ...` (returns false).
+    fn first_row(
+        &mut self,
+        row: &[&str],
+        line: &str,
+        line_no: usize,
+    ) -> Result<bool, CampaignError> {
+        self.have_names = true;
+        let t = &mut self.table;
+        if self.opts.header_line == Some(0) {
+            t.names = (1..=row.len()).map(|j| j.to_string()).collect();
             t.columns = (0..t.names.len()).map(|_| Vec::new()).collect();
             t.bad = vec![None; t.names.len()];
+            return Ok(false);
         }
+        t.header_line = line_no;
+        t.names = header_names(row, line_no, self.file)?;
+        let cap = self.text_len / (line.len() + 1).max(8);
+        t.columns = (0..t.names.len())
+            .map(|_| Vec::with_capacity(cap))
+            .collect();
+        t.bad = vec![None; t.names.len()];
+        Ok(true)
+    }
+
+    /// One row of samples: a value (or, leniently, NaN and the cell's error) per column,
+    /// NaN and "empty cell" for the columns a short row leaves out.
+    fn data_row(&mut self, row: &[&str], line_no: usize) -> Result<(), CampaignError> {
+        let t = &mut self.table;
         let width = t.names.len();
         for (j, cell) in row.iter().enumerate().take(width) {
-            match cell_value(&t.names[j], unquote(cell), opts.decimal, &mut buffer) {
+            match cell_value(
+                &t.names[j],
+                unquote(cell),
+                self.opts.decimal,
+                &mut self.buffer,
+            ) {
                 Ok(v) => t.columns[j].push(v),
-                Err(m) if strict => return Err(err(line_no, m)),
+                Err(m) if self.strict => return Err(csv_error(self.file, line_no, m)),
                 Err(m) => {
                     t.columns[j].push(f64::NAN);
                     t.bad[j].get_or_insert((line_no, m));
                 }
             }
         }
+        self.check_width(row, line_no)?;
+        let t = &mut self.table;
+        for j in row.len()..width {
+            t.columns[j].push(f64::NAN);
+            let m = format!("channel `{}`: empty cell", t.names[j]);
+            t.bad[j].get_or_insert((line_no, m));
+        }
+        t.row_lines.push(line_no);
+        Ok(())
+    }
+
+    /// A row is not longer than the header (nor, strictly, shorter).
+    fn check_width(&self, row: &[&str], line_no: usize) -> Result<(), CampaignError> {
+        let t = &self.table;
+        let width = t.names.len();
         // a lab file's last column may be a text note that holds the delimiter itself
         // (a DAQ's "DAQ Pause, DAQ Stop" event): when nothing can map it (it is already
         // text), the surplus cells are the rest of that note
-        let text_tail = !strict && width > 0 && t.bad[width - 1].is_some();
-        if (row.len() > width && !text_tail) || (strict && row.len() < width) {
+        let text_tail = !self.strict && width > 0 && t.bad[width - 1].is_some();
+        if (row.len() > width && !text_tail) || (self.strict && row.len() < width) {
             let header = match t.header_line {
                 0 => "the first row".to_string(),
                 h => format!("the header (line {h})"),
             };
-            return Err(err(
+            return Err(csv_error(
+                self.file,
                 line_no,
                 format!(
                     "ragged row: {} cells but {header} has {width} channels",
@@ -183,30 +258,32 @@ pub(super) fn parse_csv(
                 ),
             ));
         }
-        for j in row.len()..width {
-            t.columns[j].push(f64::NAN);
-            let m = format!("channel `{}`: empty cell", t.names[j]);
-            t.bad[j].get_or_insert((line_no, m));
+        Ok(())
+    }
+
+    /// The table, once the text is read: it must have names and at least one row.
+    fn finish(self) -> Result<CsvTable, CampaignError> {
+        let t = self.table;
+        if !self.have_names {
+            return Err(csv_error(
+                self.file,
+                self.last_line.max(1),
+                "empty record: no header line and no samples".to_string(),
+            ));
         }
-        t.row_lines.push(line_no);
+        if t.row_lines.is_empty() {
+            return Err(csv_error(
+                self.file,
+                if t.header_line > 0 {
+                    t.header_line
+                } else {
+                    self.last_line.max(1)
+                },
+                "empty record: a header but no samples".to_string(),
+            ));
+        }
+        Ok(t)
     }
-    if !have_names {
-        return Err(err(
-            last_line.max(1),
-            "empty record: no header line and no samples".to_string(),
-        ));
-    }
-    if t.row_lines.is_empty() {
-        return Err(err(
-            if t.header_line > 0 {
-                t.header_line
-            } else {
-                last_line.max(1)
-            },
-            "empty record: a header but no samples".to_string(),
-        ));
-    }
-    Ok(t)
 }
 
 pub(super) fn require_channels(
@@ -248,52 +325,20 @@ pub(super) fn check_time(
     rate_source: &str,
     file: &str,
 ) -> Result<f64, CampaignError> {
-    let err = |line: usize, message: String| CampaignError::Csv {
-        file: file.to_string(),
-        line,
-        message,
-    };
-    let n = time.len();
-    for k in 1..n {
-        if time[k] <= time[k - 1] {
-            return Err(err(
-                t.row_lines[k],
-                format!(
-                    "time_s is not increasing: {} after {} (line {})",
-                    time[k],
-                    time[k - 1],
-                    t.row_lines[k - 1]
-                ),
-            ));
-        }
-    }
-    if n < 2 {
+    let column = TimeColumn { t, time, file };
+    column.check_increasing()?;
+    if time.len() < 2 {
         return match sample_rate_hz {
             Some(fs) => Ok(fs),
-            None => Err(err(
-                t.row_lines[0],
+            None => Err(column.err(
+                0,
                 "a single sample: the sample rate cannot be inferred from time_s".to_string(),
             )),
         };
     }
     let grid = TimeGrid::fit(time);
     let fs = match sample_rate_hz {
-        Some(fs) => {
-            let clock = grid.rate_hz();
-            if ((clock - fs) / fs).abs() > RATE_TOLERANCE {
-                return Err(err(
-                    t.row_lines[1],
-                    format!(
-                        "sample rate disagrees: time column gives {} Hz, {rate_source} says {} Hz \
-                         (more than {} % apart)",
-                        num(round_sig(clock, 7)),
-                        num(fs),
-                        RATE_TOLERANCE * 100.0
-                    ),
-                ));
-            }
-            fs
-        }
+        Some(fs) => column.check_rate(&grid, fs, rate_source)?,
         None => {
             let fs = grid.rate_hz();
             if (fs - fs.round()).abs() < 1e-6 * fs {
@@ -303,7 +348,71 @@ pub(super) fn check_time(
             }
         }
     };
-    if let Some(k) = grid.first_off_grid(time) {
+    column.check_on_grid(&grid)?;
+    Ok(fs)
+}
+
+/// A record's time column with the table it came from (for the lines of its samples)
+/// and the file's name, for [`check_time`]'s errors.
+struct TimeColumn<'a> {
+    t: &'a CsvTable,
+    time: &'a [f64],
+    file: &'a str,
+}
+
+impl TimeColumn<'_> {
+    /// An error at the line of sample `k`.
+    fn err(&self, k: usize, message: String) -> CampaignError {
+        csv_error(self.file, self.t.row_lines[k], message)
+    }
+
+    /// Every sample later than the one before it.
+    fn check_increasing(&self) -> Result<(), CampaignError> {
+        let (time, rows) = (self.time, &self.t.row_lines);
+        match (1..time.len()).find(|&k| time[k] <= time[k - 1]) {
+            Some(k) => Err(self.err(
+                k,
+                format!(
+                    "time_s is not increasing: {} after {} (line {})",
+                    time[k],
+                    time[k - 1],
+                    rows[k - 1]
+                ),
+            )),
+            None => Ok(()),
+        }
+    }
+
+    /// The declared rate `fs` (from `rate_source`) agrees with the grid's within
+    /// [`RATE_TOLERANCE`]; returns it.
+    fn check_rate(
+        &self,
+        grid: &TimeGrid,
+        fs: f64,
+        rate_source: &str,
+    ) -> Result<f64, CampaignError> {
+        let clock = grid.rate_hz();
+        if ((clock - fs) / fs).abs() > RATE_TOLERANCE {
+            return Err(self.err(
+                1,
+                format!(
+                    "sample rate disagrees: time column gives {} Hz, {rate_source} says {} Hz \
+                     (more than {} % apart)",
+                    num(round_sig(clock, 7)),
+                    num(fs),
+                    RATE_TOLERANCE * 100.0
+                ),
+            ));
+        }
+        Ok(fs)
+    }
+
+    /// Every sample on the column's own uniform grid ([`TimeGrid::first_off_grid`]).
+    fn check_on_grid(&self, grid: &TimeGrid) -> Result<(), CampaignError> {
+        let Some(k) = grid.first_off_grid(self.time) else {
+            return Ok(());
+        };
+        let time = self.time;
         let expected = grid.at(k as f64);
         // a start at 0 shows as 0, not as the fit's rounding residue
         let t0 = if grid.t0.abs() < 1e-6 * grid.step {
@@ -311,8 +420,8 @@ pub(super) fn check_time(
         } else {
             grid.t0
         };
-        return Err(err(
-            t.row_lines[k],
+        Err(self.err(
+            k,
             format!(
                 "non-uniform time: sample {k} is at time_s = {} but the time column's own \
                  uniform grid ({} Hz from {}) puts it at {} (step here {} s, expected {} s)",
@@ -326,9 +435,8 @@ pub(super) fn check_time(
                 )),
                 num(round_sig(grid.step, 6)),
             ),
-        ));
+        ))
     }
-    Ok(fs)
 }
 
 /// `x` for a message: 9 significant digits, exponent notation when very large or small.

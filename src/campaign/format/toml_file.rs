@@ -55,7 +55,43 @@ pub(super) fn parse_with_time_rates(
     let text = lone_cr_to_lf(text);
     let text: &str = &text;
     let lines = Lines { text, file };
-    let doc: RawDoc = toml::from_str(text).map_err(|e| {
+    let doc = parse_doc(&lines)?;
+    let name = campaign_name(&lines, &doc, default_name)?;
+    let sample_rate_hz = doc
+        .sample_rate_hz
+        .as_ref()
+        .map(|v| number(&lines, v, None, "sample_rate_hz", SAMPLE_RATE_HZ))
+        .transpose()?;
+    let geometry = match &doc.geometry {
+        Some(g) => read_geometry(&lines, g)?,
+        None => Geometry::default(),
+    };
+    let controller = match &doc.controller {
+        Some(c) => read_controller(&lines, c)?,
+        None => ControllerOverride::default(),
+    };
+    let raw_tests = test_entries(&lines, &doc)?;
+    let wide = CampaignWide::read(&lines, &doc, raw_tests, sample_rate_hz)?;
+    let mut read = TestsRead::new(&lines, &wide);
+    for (i, raw) in raw_tests.iter().enumerate() {
+        read.add(raw, i, time_rates.get(i).copied().flatten())?;
+    }
+    Ok((
+        CampaignInfo {
+            name,
+            sample_rate_hz: sample_rate_hz.unwrap_or(f64::NAN),
+            geometry,
+            controller,
+            tests: read.tests,
+        },
+        read.file_lines,
+        read.plans,
+    ))
+}
+
+/// The TOML document of campaign.toml; a syntax error names its line.
+fn parse_doc(lines: &Lines) -> Result<RawDoc, CampaignError> {
+    toml::from_str(lines.text).map_err(|e| {
         let msg = e.message().trim().to_string();
         lines.err(
             e.span().map(|s| s.start),
@@ -63,107 +99,151 @@ pub(super) fn parse_with_time_rates(
             None,
             format!("not valid TOML: {msg}"),
         )
-    })?;
-    let name = match &doc.name {
+    })
+}
+
+/// The campaign's `name`, a string; `default_name` when campaign.toml gives none.
+fn campaign_name(lines: &Lines, doc: &RawDoc, default_name: &str) -> Result<String, CampaignError> {
+    match &doc.name {
         Some(v) => match v.get_ref() {
-            toml::Value::String(s) => s.clone(),
-            other => {
-                return Err(lines.err(
-                    Some(v.span().start),
-                    None,
-                    Some("name"),
-                    format!("expected a string, found {}", type_name(other)),
-                ))
-            }
+            toml::Value::String(s) => Ok(s.clone()),
+            other => Err(lines.err(
+                Some(v.span().start),
+                None,
+                Some("name"),
+                format!("expected a string, found {}", type_name(other)),
+            )),
         },
-        None => default_name.to_string(),
-    };
-    let sample_rate_hz = doc
-        .sample_rate_hz
-        .as_ref()
-        .map(|v| number(&lines, v, None, "sample_rate_hz", SAMPLE_RATE_HZ))
-        .transpose()?;
-    // every key of [geometry] and [controller] is optional: one not given is unknown
-    let geometry = match &doc.geometry {
-        Some(g) => {
-            let get = |key: &str, bound: Bound| -> Result<Option<f64>, CampaignError> {
-                lookup(g.get_ref(), key)
-                    .map(|v| {
-                        number(&lines, v, None, key, bound)
-                            .map_err(|e| rename_key(e, &format!("geometry.{key}")))
-                    })
-                    .transpose()
-            };
-            Geometry {
-                piston_area_m2: get("piston_area_m2", PISTON_AREA_M2)?,
-                total_oil_volume_m3: get("total_oil_volume_m3", OIL_VOLUME_M3)?,
-                supply_pressure_pa: get("supply_pressure_pa", SUPPLY_PRESSURE_PA)?,
-                flow_gain_m3_s: get("flow_gain_m3_s", FLOW_GAIN_M3_S)?,
-            }
-        }
-        None => Geometry::default(),
-    };
-    let controller = match &doc.controller {
-        Some(c) => read_controller(&lines, c)?,
-        None => ControllerOverride::default(),
-    };
-    let raw_tests = match &doc.test {
-        Some(t) if !t.get_ref().is_empty() => t,
-        Some(t) => {
-            return Err(lines.err(
-                Some(t.span().start),
-                None,
-                Some("test"),
-                "the campaign has no tests",
-            ))
-        }
-        None => {
-            return Err(lines.err(
-                None,
-                None,
-                Some("test"),
-                "the campaign has no [[test]] entries",
-            ))
-        }
-    };
-    let campaign_read = match &doc.read {
-        Some(v) => toml_layout::read_options(&lines, v.span().start, None, v.get_ref())?,
-        None => ReadOverride::default(),
-    };
-    let campaign_columns = match &doc.columns {
-        Some(v) => toml_layout::columns(&lines, v.span().start, None, v.get_ref())?,
-        None => BTreeMap::new(),
-    };
-    let lab_form = doc.read.is_some()
-        || doc.columns.is_some()
-        || raw_tests.get_ref().iter().any(|t| {
-            lookup(t.get_ref(), "read").is_some() || lookup(t.get_ref(), "columns").is_some()
-        });
-    if sample_rate_hz.is_none() && !lab_form {
-        return Err(lines.err(
-            None,
-            None,
-            Some("sample_rate_hz"),
-            "required key is missing (the sampling rate of every record, Hz)",
-        ));
+        None => Ok(default_name.to_string()),
     }
-    let mut tests: Vec<TestSpec> = Vec::new();
-    let mut plans: Vec<ReadPlan> = Vec::new();
-    let mut file_lines = Vec::new();
-    let mut header_lines: Vec<usize> = Vec::new();
-    for (i, raw) in raw_tests.get_ref().iter().enumerate() {
-        let time_rate = time_rates.get(i).copied().flatten();
-        let (spec, file_off) = read_test(&lines, raw, i, sample_rate_hz, time_rate)?;
-        let here = lines.line(raw.span().start);
-        let mut plan = test_plan(
-            &lines,
-            raw,
-            &spec,
+}
+
+/// `[geometry]`: every key optional (one not given is unknown), each checked against
+/// its plausible range and named `geometry.<key>` in errors.
+fn read_geometry(lines: &Lines, g: &Spanned<RawTable>) -> Result<Geometry, CampaignError> {
+    let get = |key: &str, bound: Bound| -> Result<Option<f64>, CampaignError> {
+        lookup(g.get_ref(), key)
+            .map(|v| {
+                number(lines, v, None, key, bound)
+                    .map_err(|e| rename_key(e, &format!("geometry.{key}")))
+            })
+            .transpose()
+    };
+    Ok(Geometry {
+        piston_area_m2: get("piston_area_m2", PISTON_AREA_M2)?,
+        total_oil_volume_m3: get("total_oil_volume_m3", OIL_VOLUME_M3)?,
+        supply_pressure_pa: get("supply_pressure_pa", SUPPLY_PRESSURE_PA)?,
+        flow_gain_m3_s: get("flow_gain_m3_s", FLOW_GAIN_M3_S)?,
+    })
+}
+
+/// The `[[test]]` entries: at least one.
+fn test_entries<'d>(
+    lines: &Lines,
+    doc: &'d RawDoc,
+) -> Result<&'d [Spanned<RawTable>], CampaignError> {
+    match &doc.test {
+        Some(t) if !t.get_ref().is_empty() => Ok(t.get_ref()),
+        Some(t) => Err(lines.err(
+            Some(t.span().start),
+            None,
+            Some("test"),
+            "the campaign has no tests",
+        )),
+        None => Err(lines.err(
+            None,
+            None,
+            Some("test"),
+            "the campaign has no [[test]] entries",
+        )),
+    }
+}
+
+/// What every test's plan starts from: the campaign's rate, `[read]` and `[columns]`,
+/// and whether campaign.toml is in a laboratory's form (any `read` or `columns`).
+struct CampaignWide {
+    sample_rate_hz: Option<f64>,
+    read: ReadOverride,
+    columns: BTreeMap<String, ColumnEntry>,
+    lab_form: bool,
+}
+
+impl CampaignWide {
+    /// Read `[read]` and `[columns]`; outside a laboratory's form `sample_rate_hz` is
+    /// required (the project's own form has no time base without it).
+    fn read(
+        lines: &Lines,
+        doc: &RawDoc,
+        raw_tests: &[Spanned<RawTable>],
+        sample_rate_hz: Option<f64>,
+    ) -> Result<CampaignWide, CampaignError> {
+        let read = match &doc.read {
+            Some(v) => toml_layout::read_options(lines, v.span().start, None, v.get_ref())?,
+            None => ReadOverride::default(),
+        };
+        let columns = match &doc.columns {
+            Some(v) => toml_layout::columns(lines, v.span().start, None, v.get_ref())?,
+            None => BTreeMap::new(),
+        };
+        let lab_form = doc.read.is_some()
+            || doc.columns.is_some()
+            || raw_tests.iter().any(|t| {
+                lookup(t.get_ref(), "read").is_some() || lookup(t.get_ref(), "columns").is_some()
+            });
+        if sample_rate_hz.is_none() && !lab_form {
+            return Err(lines.err(
+                None,
+                None,
+                Some("sample_rate_hz"),
+                "required key is missing (the sampling rate of every record, Hz)",
+            ));
+        }
+        Ok(CampaignWide {
             sample_rate_hz,
-            &campaign_read,
-            &campaign_columns,
-        )?;
-        plan.lab_form = lab_form;
+            read,
+            columns,
+            lab_form,
+        })
+    }
+}
+
+/// The tests read so far, with their plans, the lines of their `file` keys and of their
+/// `[[test]]` headers (for the duplicate checks' messages).
+struct TestsRead<'a> {
+    lines: &'a Lines<'a>,
+    wide: &'a CampaignWide,
+    tests: Vec<TestSpec>,
+    plans: Vec<ReadPlan>,
+    file_lines: Vec<usize>,
+    header_lines: Vec<usize>,
+}
+
+impl<'a> TestsRead<'a> {
+    /// None read yet, each to be planned from `wide`.
+    fn new(lines: &'a Lines<'a>, wide: &'a CampaignWide) -> Self {
+        TestsRead {
+            lines,
+            wide,
+            tests: Vec::new(),
+            plans: Vec::new(),
+            file_lines: Vec::new(),
+            header_lines: Vec::new(),
+        }
+    }
+
+    /// Read test `index` and its plan, check it has a time base and is not a duplicate,
+    /// and keep it.
+    fn add(
+        &mut self,
+        raw: &Spanned<RawTable>,
+        index: usize,
+        time_rate: Option<f64>,
+    ) -> Result<(), CampaignError> {
+        let (lines, wide) = (self.lines, self.wide);
+        let (spec, file_off) = read_test(lines, raw, index, wide.sample_rate_hz, time_rate)?;
+        let here = lines.line(raw.span().start);
+        let mut plan = test_plan(lines, raw, &spec, wide)?;
+        plan.lab_form = wide.lab_form;
         if plan.sample_rate_hz.is_none() && !plan.columns.contains_key("time_s") {
             return Err(lines.err(
                 Some(raw.span().start),
@@ -174,56 +254,64 @@ pub(super) fn parse_with_time_rates(
                  [columns] (e.g. `time_s = { column = \"Time_ms\", scale = 0.001 }`)",
             ));
         }
-        if let Some(j) = tests.iter().position(|t| t.name == spec.name) {
-            return Err(lines.err(
+        self.check_name(raw, &spec)?;
+        self.check_file(&spec, &plan, file_off)?;
+        self.plans.push(plan);
+        self.header_lines.push(here);
+        self.file_lines.push(lines.line(file_off));
+        self.tests.push(spec);
+        Ok(())
+    }
+
+    /// A new test's name is not taken by an earlier test.
+    fn check_name(&self, raw: &Spanned<RawTable>, spec: &TestSpec) -> Result<(), CampaignError> {
+        match self.tests.iter().position(|t| t.name == spec.name) {
+            Some(j) => Err(self.lines.err(
                 Some(raw.span().start),
                 Some(&spec.name),
                 Some("name"),
                 format!(
                     "duplicate test name: already used by the test at line {}",
-                    header_lines[j]
+                    self.header_lines[j]
                 ),
-            ));
+            )),
+            None => Ok(()),
         }
+    }
+
+    /// A new test's file is not an earlier test's (`file_off`: its value's offset).
+    fn check_file(
+        &self,
+        spec: &TestSpec,
+        plan: &ReadPlan,
+        file_off: usize,
+    ) -> Result<(), CampaignError> {
+        let lab_form = self.wide.lab_form;
         // one file may hold several tests in a laboratory's form, each with its columns
         let same = |j: &usize| {
-            normalise_relative(&tests[*j].file) == normalise_relative(&spec.file)
-                && (!lab_form || plans[*j].columns == plan.columns)
+            normalise_relative(&self.tests[*j].file) == normalise_relative(&spec.file)
+                && (!lab_form || self.plans[*j].columns == plan.columns)
         };
-        if let Some(j) = (0..tests.len()).find(same) {
-            return Err(lines.err(
+        match (0..self.tests.len()).find(same) {
+            Some(j) => Err(self.lines.err(
                 Some(file_off),
                 Some(&spec.name),
                 Some("file"),
                 format!(
                     "`{}` is already the file of test `{}` (line {}){}",
                     spec.file,
-                    tests[j].name,
-                    file_lines[j],
+                    self.tests[j].name,
+                    self.file_lines[j],
                     if lab_form {
                         " with the same columns"
                     } else {
                         ""
                     }
                 ),
-            ));
+            )),
+            None => Ok(()),
         }
-        plans.push(plan);
-        header_lines.push(here);
-        file_lines.push(lines.line(file_off));
-        tests.push(spec);
     }
-    Ok((
-        CampaignInfo {
-            name,
-            sample_rate_hz: sample_rate_hz.unwrap_or(f64::NAN),
-            geometry,
-            controller,
-            tests,
-        },
-        file_lines,
-        plans,
-    ))
 }
 
 /// How test `spec`'s file is read: `[read]` and `[columns]` with the test's overrides.
@@ -231,9 +319,7 @@ fn test_plan(
     lines: &Lines,
     raw: &Spanned<RawTable>,
     spec: &TestSpec,
-    sample_rate_hz: Option<f64>,
-    campaign_read: &ReadOverride,
-    campaign_columns: &BTreeMap<String, ColumnEntry>,
+    wide: &CampaignWide,
 ) -> Result<ReadPlan, CampaignError> {
     let t = raw.get_ref();
     let name = Some(spec.name.as_str());
@@ -250,15 +336,13 @@ fn test_plan(
     };
     // the test's own rate was checked with the test ([`read_test`])
     let own_rate_line = lookup(t, "sample_rate_hz").map(|v| lines.line(v.span().start));
-    let columns = merge_columns(campaign_columns, &test_columns)
+    let columns = merge_columns(&wide.columns, &test_columns)
         .map_err(|m| lines.err(Some(columns_off), name, Some("columns"), m))?;
     Ok(ReadPlan {
-        read: ReadOptions::default()
-            .merged(campaign_read)
-            .merged(&test_read),
+        read: ReadOptions::default().merged(&wide.read).merged(&test_read),
         columns,
         lab_form: false,
-        sample_rate_hz: spec.sample_rate_hz.or(sample_rate_hz),
+        sample_rate_hz: spec.sample_rate_hz.or(wide.sample_rate_hz),
         own_rate_line,
         control: spec.control,
     })

@@ -40,6 +40,39 @@ pub(super) fn read_test(
 ) -> Result<(TestSpec, usize), CampaignError> {
     let off = raw.span().start;
     let t = raw.get_ref();
+    let name = test_name(lines, t, off, index)?;
+    let entry = TestEntry {
+        lines,
+        t,
+        off,
+        name: Some(name.as_str()),
+    };
+    let (file, file_off) = entry.file()?;
+    let kind = entry.kind()?;
+    let control = entry.control()?;
+    let mut spec = TestSpec::new(name.clone(), file, kind, control);
+    // the test's own rate, checked like the campaign's; its Nyquist bounds the test
+    spec.sample_rate_hz = entry.optional("sample_rate_hz", SAMPLE_RATE_HZ)?;
+    let nyquist = Nyquist::of(spec.sample_rate_hz.or(campaign_rate_hz), time_rate_hz);
+    entry.read_levels(&mut spec, &nyquist)?;
+    if let Some(v) = lookup(t, "band_hz") {
+        spec.band_hz = Some(entry.band(v, &nyquist)?);
+    }
+    entry.check_kind_keys(&spec)?;
+    if let Some(v) = lookup(t, "controller") {
+        spec.controller = read_override(lines, v, &name)?;
+    }
+    Ok((spec, file_off))
+}
+
+/// The test's `name`, required and not blank; an error before the name is known names
+/// the test by its place, `#N (unnamed)`.
+fn test_name(
+    lines: &Lines,
+    t: &RawTable,
+    off: usize,
+    index: usize,
+) -> Result<String, CampaignError> {
     let (name, _) = required_string(lines, t, off, None, "name", "every [[test]] needs a name")
         .map_err(|e| match e {
             CampaignError::Toml {
@@ -57,89 +90,137 @@ pub(super) fn read_test(
             },
             other => other,
         })?;
-    let name = name.to_string();
-    let tn = Some(name.as_str());
     if name.trim().is_empty() {
-        return Err(lines.err(Some(off), tn, Some("name"), "test name is empty"));
+        return Err(lines.err(Some(off), Some(name), Some("name"), "test name is empty"));
     }
-    let (file, file_off) = required_string(lines, t, off, tn, "file", "the CSV of the test")?;
-    if file.trim().is_empty() {
-        return Err(lines.err(Some(file_off), tn, Some("file"), "file name is empty"));
+    Ok(name.to_string())
+}
+
+/// The rate whose Nyquist frequency bounds a test's frequencies and band, and what
+/// gives it (named in errors).
+struct Nyquist {
+    sample_rate_hz: f64,
+    rate_name: &'static str,
+}
+
+impl Nyquist {
+    /// The test's own or the campaign's rate, else its time column's; neither known: no
+    /// bound yet (infinite).
+    fn of(declared_hz: Option<f64>, time_rate_hz: Option<f64>) -> Nyquist {
+        let (sample_rate_hz, rate_name) = match (declared_hz, time_rate_hz) {
+            (Some(fs), _) => (fs, "sample_rate_hz"),
+            (None, Some(fs)) => (fs, "the test's time column"),
+            // no rate yet: no frequency is above a Nyquist frequency not known
+            (None, None) => (f64::INFINITY, ""),
+        };
+        Nyquist {
+            sample_rate_hz,
+            rate_name,
+        }
     }
-    check_test_file(lines, file, file_off, tn)?;
-    let (kind_s, kind_off) = required_string(
-        lines,
-        t,
-        off,
-        tn,
-        "kind",
-        "random | sine | triangle | record",
-    )?;
-    let kind = match kind_s {
-        "random" => TestKind::Random,
-        "sine" => TestKind::Sine,
-        "triangle" => TestKind::Triangle,
-        "record" => TestKind::Record,
-        other => {
-            return Err(lines.err(
-                Some(kind_off),
-                tn,
-                Some("kind"),
-                format!("unknown kind `{other}`; expected random | sine | triangle | record"),
-            ))
-        }
-    };
-    let (control_s, control_off) =
-        required_string(lines, t, off, tn, "control", "displacement | acceleration")?;
-    let control = match control_s {
-        "displacement" => Control::Displacement,
-        "acceleration" => Control::Acceleration,
-        other => {
-            return Err(lines.err(
-                Some(control_off),
-                tn,
-                Some("control"),
-                format!("unknown control `{other}`; expected displacement | acceleration"),
-            ))
-        }
-    };
-    let mut spec = TestSpec::new(name.clone(), file, kind, control);
-    let optional = |key: &str, check: Bound| -> Result<Option<f64>, CampaignError> {
-        lookup(t, key)
-            .map(|v| number(lines, v, tn, key, check))
+
+    /// Half the rate, Hz.
+    fn frequency_hz(&self) -> f64 {
+        self.sample_rate_hz / 2.0
+    }
+}
+
+/// One `[[test]]` table while it is read: where it is and the test's name, for errors.
+struct TestEntry<'a> {
+    lines: &'a Lines<'a>,
+    t: &'a RawTable,
+    off: usize,
+    name: Option<&'a str>,
+}
+
+impl<'a> TestEntry<'a> {
+    /// An error at `off` (the entry's header when `None`) on `key` of this test.
+    fn err(&self, off: Option<usize>, key: &str, message: impl Into<String>) -> CampaignError {
+        self.lines.err(off, self.name, Some(key), message)
+    }
+
+    /// A required string key and the offset of its value.
+    fn required(&self, key: &str, what: &str) -> Result<(&'a str, usize), CampaignError> {
+        required_string(self.lines, self.t, self.off, self.name, key, what)
+    }
+
+    /// An optional number key, checked against `check`.
+    fn optional(&self, key: &str, check: Bound) -> Result<Option<f64>, CampaignError> {
+        lookup(self.t, key)
+            .map(|v| number(self.lines, v, self.name, key, check))
             .transpose()
-    };
-    let level = match control {
-        Control::Displacement => DISPLACEMENT_M,
-        Control::Acceleration => ACCELERATION_M_S2,
-    };
-    // the test's own rate, checked like the campaign's; its Nyquist bounds the test
-    spec.sample_rate_hz = optional("sample_rate_hz", SAMPLE_RATE_HZ)?;
-    let (sample_rate_hz, rate_name) = match (spec.sample_rate_hz.or(campaign_rate_hz), time_rate_hz)
-    {
-        (Some(fs), _) => (fs, "sample_rate_hz"),
-        (None, Some(fs)) => (fs, "the test's time column"),
-        // no rate yet: no frequency is above a Nyquist frequency not known
-        (None, None) => (f64::INFINITY, ""),
-    };
-    spec.rms = optional("rms", level)?;
-    spec.frequency_hz = optional("frequency_hz", TEST_FREQUENCY_HZ)?;
-    spec.amplitude_m = optional("amplitude_m", DISPLACEMENT_M)?;
-    if let Some(f) = spec.frequency_hz.filter(|&f| f > sample_rate_hz / 2.0) {
-        let v = lookup(t, "frequency_hz").map(|v| v.span().start);
-        return Err(lines.err(
-            v,
-            tn,
-            Some("frequency_hz"),
-            format!(
-                "{f} Hz is above the Nyquist frequency {} Hz of {rate_name}",
-                sample_rate_hz / 2.0
-            ),
-        ));
     }
-    if let Some(v) = lookup(t, "band_hz") {
-        let voff = Some(v.span().start);
-        let bad = |m: String| lines.err(voff, tn, Some("band_hz"), m);
+
+    /// The test's `file`: required, not blank, lexically inside the campaign folder;
+    /// with the offset of its value.
+    fn file(&self) -> Result<(&'a str, usize), CampaignError> {
+        let (file, file_off) = self.required("file", "the CSV of the test")?;
+        if file.trim().is_empty() {
+            return Err(self.err(Some(file_off), "file", "file name is empty"));
+        }
+        check_test_file(self.lines, file, file_off, self.name)?;
+        Ok((file, file_off))
+    }
+
+    /// The test's `kind`: random, sine, triangle or record.
+    fn kind(&self) -> Result<TestKind, CampaignError> {
+        let (kind_s, kind_off) = self.required("kind", "random | sine | triangle | record")?;
+        match kind_s {
+            "random" => Ok(TestKind::Random),
+            "sine" => Ok(TestKind::Sine),
+            "triangle" => Ok(TestKind::Triangle),
+            "record" => Ok(TestKind::Record),
+            other => Err(self.err(
+                Some(kind_off),
+                "kind",
+                format!("unknown kind `{other}`; expected random | sine | triangle | record"),
+            )),
+        }
+    }
+
+    /// The test's `control`: displacement or acceleration.
+    fn control(&self) -> Result<Control, CampaignError> {
+        let (control_s, control_off) = self.required("control", "displacement | acceleration")?;
+        match control_s {
+            "displacement" => Ok(Control::Displacement),
+            "acceleration" => Ok(Control::Acceleration),
+            other => Err(self.err(
+                Some(control_off),
+                "control",
+                format!("unknown control `{other}`; expected displacement | acceleration"),
+            )),
+        }
+    }
+
+    /// `rms` (in the unit of the test's control), `frequency_hz` and `amplitude_m`, each
+    /// optional here; a frequency must be below the test's Nyquist frequency.
+    fn read_levels(&self, spec: &mut TestSpec, nyquist: &Nyquist) -> Result<(), CampaignError> {
+        let level = match spec.control {
+            Control::Displacement => DISPLACEMENT_M,
+            Control::Acceleration => ACCELERATION_M_S2,
+        };
+        spec.rms = self.optional("rms", level)?;
+        spec.frequency_hz = self.optional("frequency_hz", TEST_FREQUENCY_HZ)?;
+        spec.amplitude_m = self.optional("amplitude_m", DISPLACEMENT_M)?;
+        if let Some(f) = spec.frequency_hz.filter(|&f| f > nyquist.frequency_hz()) {
+            let rate_name = nyquist.rate_name;
+            let v = lookup(self.t, "frequency_hz").map(|v| v.span().start);
+            return Err(self.err(
+                v,
+                "frequency_hz",
+                format!(
+                    "{f} Hz is above the Nyquist frequency {} Hz of {rate_name}",
+                    nyquist.frequency_hz()
+                ),
+            ));
+        }
+        Ok(())
+    }
+
+    /// `band_hz = [low, high]`: two finite numbers, `0 <= low < high`, a low edge above 0
+    /// no lower than the lowest test frequency, the high edge at most the Nyquist frequency.
+    fn band(&self, v: &Spanned<toml::Value>, nyquist: &Nyquist) -> Result<[f64; 2], CampaignError> {
+        let bad = |m: String| self.err(Some(v.span().start), "band_hz", m);
         let toml::Value::Array(a) = v.get_ref() else {
             return Err(bad(format!(
                 "expected [low, high] in Hz, found {}",
@@ -160,62 +241,56 @@ pub(super) fn read_test(
                 TEST_FREQUENCY_HZ.min
             )));
         }
-        if hi > sample_rate_hz / 2.0 {
+        if hi > nyquist.frequency_hz() {
+            let rate_name = nyquist.rate_name;
             return Err(bad(format!(
                 "[{lo}, {hi}]: the band goes above the Nyquist frequency {} Hz of {rate_name}",
-                sample_rate_hz / 2.0
+                nyquist.frequency_hz()
             )));
         }
-        spec.band_hz = Some([lo, hi]);
+        Ok([lo, hi])
     }
-    match kind {
-        TestKind::Random => {
-            let why = "a random test needs its level (m RMS for displacement control, m/s^2 RMS for acceleration control)";
-            if spec.rms.is_none() {
-                return Err(lines.err(
-                    Some(off),
-                    tn,
-                    Some("rms"),
-                    format!("required key is missing ({why})"),
-                ));
+
+    /// The keys the test's kind needs: a random test its level and band, a sine or
+    /// triangle its frequency and amplitude; a record test nothing more.
+    fn check_kind_keys(&self, spec: &TestSpec) -> Result<(), CampaignError> {
+        let missing = |key: &str, message: String| Err(self.err(Some(self.off), key, message));
+        match spec.kind {
+            TestKind::Random => {
+                let why = "a random test needs its level (m RMS for displacement control, m/s^2 RMS for acceleration control)";
+                if spec.rms.is_none() {
+                    return missing("rms", format!("required key is missing ({why})"));
+                }
+                if spec.band_hz.is_none() {
+                    return missing(
+                        "band_hz",
+                        "required key is missing (a random test needs its band [low, high] in Hz)"
+                            .to_string(),
+                    );
+                }
             }
-            if spec.band_hz.is_none() {
-                return Err(lines.err(
-                    Some(off),
-                    tn,
-                    Some("band_hz"),
-                    "required key is missing (a random test needs its band [low, high] in Hz)",
-                ));
+            TestKind::Sine | TestKind::Triangle => {
+                let k = if spec.kind == TestKind::Sine {
+                    "sine"
+                } else {
+                    "triangle"
+                };
+                if spec.frequency_hz.is_none() {
+                    return missing(
+                        "frequency_hz",
+                        format!("required key is missing (a {k} test needs its frequency in Hz)"),
+                    );
+                }
+                if spec.amplitude_m.is_none() {
+                    return missing(
+                        "amplitude_m",
+                        format!("required key is missing (a {k} test needs its displacement amplitude in m)"),
+                    );
+                }
             }
+            // any reference: nothing more is needed
+            TestKind::Record => {}
         }
-        TestKind::Sine | TestKind::Triangle => {
-            let k = if kind == TestKind::Sine {
-                "sine"
-            } else {
-                "triangle"
-            };
-            if spec.frequency_hz.is_none() {
-                return Err(lines.err(
-                    Some(off),
-                    tn,
-                    Some("frequency_hz"),
-                    format!("required key is missing (a {k} test needs its frequency in Hz)"),
-                ));
-            }
-            if spec.amplitude_m.is_none() {
-                return Err(lines.err(
-                    Some(off),
-                    tn,
-                    Some("amplitude_m"),
-                    format!("required key is missing (a {k} test needs its displacement amplitude in m)"),
-                ));
-            }
-        }
-        // any reference: nothing more is needed
-        TestKind::Record => {}
+        Ok(())
     }
-    if let Some(v) = lookup(t, "controller") {
-        spec.controller = read_override(lines, v, &name)?;
-    }
-    Ok((spec, file_off))
 }
