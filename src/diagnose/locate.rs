@@ -9,7 +9,8 @@ use super::calibration::{removed_by, sensor_findings, RemovedBy, SensorFinding};
 use super::output::{PartRows, UnexplainedCell};
 use super::part::Part;
 use super::residuals::{
-    channel_bands, predict, readings, CellBands, Channel, NoiseFloor, PerChannel,
+    channel_bands, predict_draws, readings, CellBands, Channel, NoiseFloor, PerChannel,
+    HELDOUT_REALISATIONS,
 };
 use super::EXPLAINED_RATIO;
 use crate::campaign::Campaign;
@@ -98,7 +99,8 @@ fn locate(
     residual: f64,
     noise: &NoiseFloor,
 ) -> Option<UnexplainedCell> {
-    let pred = predict(p, c, i, Part::Whole, noise);
+    // the report cell's bands with the draws its residual was measured with
+    let pred = predict_draws(p, c, i, Part::Whole, noise, HELDOUT_REALISATIONS);
     let r = &c.records[i];
     let worst = match channel_bands(c, i, &pred, noise, Part::Report, ch) {
         CellBands::Absent => return None,

@@ -4,7 +4,7 @@
 use super::cell::{Cell, Cells};
 use super::channels::Channel;
 use super::noise::NoiseFloor;
-use super::prediction::{predict, Prediction};
+use super::prediction::{predict_draws, Prediction, HELDOUT_REALISATIONS, REALISATIONS};
 use super::spectral::{band_split, octave_bands};
 use super::whitening::white_variance;
 use super::Part;
@@ -325,7 +325,15 @@ pub fn test_scores_of_parts(
     } else {
         Part::Whole
     };
-    let pred = predict(p, c, i, simulated, noise);
+    let heldout = parts
+        .iter()
+        .any(|&q| matches!(q, Part::Select | Part::Report));
+    let draws = if heldout {
+        HELDOUT_REALISATIONS
+    } else {
+        REALISATIONS
+    };
+    let pred = predict_draws(p, c, i, simulated, noise, draws);
     parts
         .iter()
         .zip(hold)
