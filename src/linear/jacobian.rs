@@ -27,13 +27,32 @@ pub enum LinearError {
 pub fn jacobian_at_rest(model: &Model) -> Result<(DMatrix<f64>, DMatrix<f64>), LinearError> {
     let p = &model.params;
     let nonlinear = p.actuator.model == ActuatorModel::Nonlinear;
-    // each reduced coordinate: (full-state direction, step)
-    let mut dirs: Vec<([f64; NX], f64)> = Vec::new();
-    let unit = |i: usize| {
-        let mut d = [0.0; NX];
-        d[i] = 1.0;
-        d
+    let at_rest = AtRest {
+        model,
+        dirs: reduced_coordinates(model, nonlinear)?,
+        nonlinear,
+        rest: model.rest_state(),
+        noise: SensorNoise::default(),
     };
+    Ok((at_rest.state_jacobian(), at_rest.reference_jacobian()))
+}
+
+/// One reduced coordinate: its direction in the full state and its difference step.
+type Direction = ([f64; NX], f64);
+
+/// The unit direction of full state `i`.
+fn unit(i: usize) -> [f64; NX] {
+    let mut d = [0.0; NX];
+    d[i] = 1.0;
+    d
+}
+
+/// The reduced coordinates in their order, each with its step: the servovalve's states,
+/// the load pressure, the table and friction, each specimen mode, the foundation. The
+/// delay valve and free play have no Jacobian at rest.
+fn reduced_coordinates(model: &Model, nonlinear: bool) -> Result<Vec<Direction>, LinearError> {
+    let p = &model.params;
+    let mut dirs: Vec<Direction> = Vec::new();
     match p.servovalve.model {
         ServovalveModel::Delay => return Err(LinearError::DelayValve),
         _ if p.free_play.enabled => return Err(LinearError::FreePlay),
@@ -65,13 +84,28 @@ pub fn jacobian_at_rest(model: &Model) -> Result<(DMatrix<f64>, DMatrix<f64>), L
         dirs.push((unit(ix::XF), 1e-7));
         dirs.push((unit(ix::VF), 1e-7));
     }
-    let n = dirs.len();
-    // project a full-state derivative onto the reduced coordinates
-    let reduce = |ds: &[f64; NX]| -> DVector<f64> {
-        let v: Vec<f64> = dirs
+    Ok(dirs)
+}
+
+/// The simulator at rest, differentiated along the reduced coordinates `dirs` (without
+/// sensor noise).
+struct AtRest<'a> {
+    model: &'a Model,
+    dirs: Vec<Direction>,
+    nonlinear: bool,
+    rest: [f64; NX],
+    noise: SensorNoise,
+}
+
+impl AtRest<'_> {
+    /// Project a full-state derivative onto the reduced coordinates (the nonlinear
+    /// actuator's load pressure rate is `P_a' - P_b'`).
+    fn reduce(&self, ds: &[f64; NX]) -> DVector<f64> {
+        let v: Vec<f64> = self
+            .dirs
             .iter()
             .map(|(d, _)| {
-                if d[ix::PA] != 0.0 && nonlinear {
+                if d[ix::PA] != 0.0 && self.nonlinear {
                     ds[ix::PA] - ds[ix::PB]
                 } else {
                     let i = d.iter().position(|&x| x != 0.0).unwrap_or(0);
@@ -80,43 +114,54 @@ pub fn jacobian_at_rest(model: &Model) -> Result<(DMatrix<f64>, DMatrix<f64>), L
             })
             .collect();
         DVector::from_vec(v)
-    };
-    let rest = model.rest_state();
-    let noise = SensorNoise::default();
-    let eval = |s: &[f64; NX], inp: &Inputs| {
+    }
+
+    /// The reduced derivative at state `s` with inputs `inp`.
+    fn eval(&self, s: &[f64; NX], inp: &Inputs) -> DVector<f64> {
         let mut ds = [0.0; NX];
-        model.derivatives(s, inp, &noise, 0.0, &mut ds);
-        reduce(&ds)
-    };
-    let zero = Inputs::default();
-    let mut a = DMatrix::zeros(n, n);
-    for (j, (d, h)) in dirs.iter().enumerate() {
-        let mut sp = rest;
-        let mut sm = rest;
-        for i in 0..NX {
-            sp[i] += h * d[i];
-            sm[i] -= h * d[i];
+        self.model.derivatives(s, inp, &self.noise, 0.0, &mut ds);
+        self.reduce(&ds)
+    }
+
+    /// `A`: one central difference along each reduced coordinate, inputs zero.
+    fn state_jacobian(&self) -> DMatrix<f64> {
+        let n = self.dirs.len();
+        let zero = Inputs::default();
+        let mut a = DMatrix::zeros(n, n);
+        for (j, (d, h)) in self.dirs.iter().enumerate() {
+            let mut sp = self.rest;
+            let mut sm = self.rest;
+            for i in 0..NX {
+                sp[i] += h * d[i];
+                sm[i] -= h * d[i];
+            }
+            let col = (self.eval(&sp, &zero) - self.eval(&sm, &zero)) / (2.0 * h);
+            a.set_column(j, &col);
         }
-        let col = (eval(&sp, &zero) - eval(&sm, &zero)) / (2.0 * h);
-        a.set_column(j, &col);
+        a
     }
-    let mut b = DMatrix::zeros(n, 3);
-    let steps = [1e-7, 1e-7, 1e-6];
-    for (j, h) in steps.iter().enumerate() {
-        let mk = |sign: f64| {
-            let mut r = Reference::default();
-            match j {
-                0 => r.displacement_m = sign * h,
-                1 => r.velocity_m_s = sign * h,
-                _ => r.acceleration_m_s2 = sign * h,
-            }
-            Inputs {
-                reference: r,
-                external_force_n: 0.0,
-            }
-        };
-        let col = (eval(&rest, &mk(1.0)) - eval(&rest, &mk(-1.0))) / (2.0 * h);
-        b.set_column(j, &col);
+
+    /// `B`: one central difference along each reference channel `r, r', r''` at rest.
+    fn reference_jacobian(&self) -> DMatrix<f64> {
+        let mut b = DMatrix::zeros(self.dirs.len(), 3);
+        let steps = [1e-7, 1e-7, 1e-6];
+        for (j, h) in steps.iter().enumerate() {
+            let mk = |sign: f64| {
+                let mut r = Reference::default();
+                match j {
+                    0 => r.displacement_m = sign * h,
+                    1 => r.velocity_m_s = sign * h,
+                    _ => r.acceleration_m_s2 = sign * h,
+                }
+                Inputs {
+                    reference: r,
+                    external_force_n: 0.0,
+                }
+            };
+            let col =
+                (self.eval(&self.rest, &mk(1.0)) - self.eval(&self.rest, &mk(-1.0))) / (2.0 * h);
+            b.set_column(j, &col);
+        }
+        b
     }
-    Ok((a, b))
 }
