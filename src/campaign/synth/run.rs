@@ -3,7 +3,7 @@
 
 use super::*;
 use crate::campaign::{Campaign, CampaignInfo, ControllerOverride, Geometry, Record, TestSpec};
-use crate::model::{Model, Outputs, SensorNoise};
+use crate::model::{Inputs, Model, Outputs, SensorNoise};
 use crate::params::Params;
 use crate::solver::simulate_run;
 use rand::SeedableRng;
@@ -37,13 +37,40 @@ pub fn synthesise_test(
 ) -> Result<SynthTest, SynthError> {
     let fs = sample_rate_hz;
     let r = reference(spec, index, opts.seed, opts.random_duration_s, fs)?;
-    let n = r.len();
     let inputs = r.inputs();
-    // sensor noise: white, seeded per test, drawn in a fixed order per sample
-    let mut rng = ChaCha8Rng::seed_from_u64(opts.seed);
+    let (noise, spool_noise) = sensor_noise(opts.seed, index, r.len(), &opts.noise);
+    let noise_arg = if opts.noise.is_none() {
+        None
+    } else {
+        Some(&noise[..])
+    };
+    let truth = simulate_test(params, spec, &inputs, fs, noise_arg, opts.max_substep_s)?;
+    let readings = Readings {
+        truth: &truth,
+        noise: &noise,
+        spool_noise: &spool_noise,
+    };
+    let rec = readings.record(r, fs);
+    Ok(SynthTest {
+        record: rec,
+        truth,
+        noise,
+        spool_noise,
+    })
+}
+
+/// The test's sensor noise, `n` samples of white noise at the levels `nl`: seeded per
+/// test (stream `2 index + 1` of `seed`), drawn in a fixed order per sample (spool,
+/// displacement, acceleration, force). Returns the feedback noise and the spool's.
+fn sensor_noise(
+    seed: u64,
+    index: usize,
+    n: usize,
+    nl: &NoiseLevels,
+) -> (Vec<SensorNoise>, Vec<f64>) {
+    let mut rng = ChaCha8Rng::seed_from_u64(seed);
     rng.set_stream(2 * index as u64 + 1);
     let normal = Normal::new(0.0, 1.0).expect("unit normal");
-    let nl = opts.noise;
     let mut noise = Vec::with_capacity(n);
     let mut spool_noise = Vec::with_capacity(n);
     for _ in 0..n {
@@ -54,57 +81,83 @@ pub fn synthesise_test(
             force_n: nl.force_n * normal.sample(&mut rng),
         });
     }
+    (noise, spool_noise)
+}
+
+/// Simulate the table under `spec`'s controller with the feedback noise `noise` (inside
+/// the loop, `None` for none); the noise-free readings at every sample, or the test's
+/// error if the run stops.
+fn simulate_test(
+    params: &Params,
+    spec: &TestSpec,
+    inputs: &[Inputs],
+    fs: f64,
+    noise: Option<&[SensorNoise]>,
+    max_substep_s: f64,
+) -> Result<Vec<Outputs>, SynthError> {
     let mut p = *params;
     p.controller = spec.controller.apply(&params.controller);
     let model = Model::new(&p);
-    let noise_arg = if nl.is_none() { None } else { Some(&noise[..]) };
-    let run = simulate_run(&model, &inputs, fs, noise_arg, opts.max_substep_s);
+    let run = simulate_run(&model, inputs, fs, noise, max_substep_s);
     if let Some(stop) = run.stop {
         return Err(SynthError::BadTest {
             name: spec.name.clone(),
             message: stop.reason,
         });
     }
-    let truth = run.outputs;
-    let rec = Record {
-        time_s: (0..n).map(|k| k as f64 / fs).collect(),
-        ref_displacement_m: r.displacement_m,
-        ref_velocity_m_s: r.velocity_m_s,
-        ref_acceleration_m_s2: r.acceleration_m_s2,
-        // the controller's own digital signal: no added noise
-        valve_command: Some(truth.iter().map(|o| o.valve_command).collect()),
-        // measured channels: the true reading plus the very noise the controller saw
-        spool_position: Some(
-            truth
-                .iter()
-                .zip(&spool_noise)
-                .map(|(o, e)| o.spool_position + e)
-                .collect(),
-        ),
-        displacement_m: Some(
-            truth
-                .iter()
-                .zip(&noise)
-                .map(|(o, e)| o.displacement_m + e.displacement_m)
-                .collect(),
-        ),
-        acceleration_m_s2: Some(
-            truth
-                .iter()
-                .zip(&noise)
-                .map(|(o, e)| o.acceleration_m_s2 + e.acceleration_m_s2)
-                .collect(),
-        ),
-        force_n: Some(
-            truth
-                .iter()
-                .zip(&noise)
-                .map(|(o, e)| o.actuator_force_n + e.force_n)
-                .collect(),
-        ),
-        // Extra channels for users (plots, checks): noise-free truths. Identification
-        // and diagnosis do not use them.
-        extra: vec![
+    Ok(run.outputs)
+}
+
+/// A simulated test's readings: the noise-free truth and the noise the sensors added.
+struct Readings<'a> {
+    truth: &'a [Outputs],
+    noise: &'a [SensorNoise],
+    spool_noise: &'a [f64],
+}
+
+impl Readings<'_> {
+    /// The test's record at `fs`: its reference `r`, the measured channels and the
+    /// noise-free extras.
+    fn record(&self, r: ReferenceSignal, fs: f64) -> Record {
+        let truth = self.truth;
+        Record {
+            time_s: (0..r.len()).map(|k| k as f64 / fs).collect(),
+            ref_displacement_m: r.displacement_m,
+            ref_velocity_m_s: r.velocity_m_s,
+            ref_acceleration_m_s2: r.acceleration_m_s2,
+            // the controller's own digital signal: no added noise
+            valve_command: Some(truth.iter().map(|o| o.valve_command).collect()),
+            // measured channels: the true reading plus the very noise the controller saw
+            spool_position: Some(
+                truth
+                    .iter()
+                    .zip(self.spool_noise)
+                    .map(|(o, e)| o.spool_position + e)
+                    .collect(),
+            ),
+            displacement_m: Some(self.measured(|o, e| o.displacement_m + e.displacement_m)),
+            acceleration_m_s2: Some(
+                self.measured(|o, e| o.acceleration_m_s2 + e.acceleration_m_s2),
+            ),
+            force_n: Some(self.measured(|o, e| o.actuator_force_n + e.force_n)),
+            extra: self.extras(),
+        }
+    }
+
+    /// A measured channel: `reading(true output, its noise)` at every sample.
+    fn measured(&self, reading: impl Fn(&Outputs, &SensorNoise) -> f64) -> Vec<f64> {
+        self.truth
+            .iter()
+            .zip(self.noise)
+            .map(|(o, e)| reading(o, e))
+            .collect()
+    }
+
+    /// Extra channels for users (plots, checks): noise-free truths. Identification and
+    /// diagnosis do not use them.
+    fn extras(&self) -> Vec<(String, Vec<f64>)> {
+        let truth = self.truth;
+        vec![
             (
                 "velocity_m_s".to_string(),
                 truth.iter().map(|o| o.velocity_m_s).collect(),
@@ -117,14 +170,8 @@ pub fn synthesise_test(
                 "pressure_b_pa".to_string(),
                 truth.iter().map(|o| o.pressure_b_pa).collect(),
             ),
-        ],
-    };
-    Ok(SynthTest {
-        record: rec,
-        truth,
-        noise,
-        spool_noise,
-    })
+        ]
+    }
 }
 
 /// Progress callback: `(samples done, samples in total)`, called from worker threads
