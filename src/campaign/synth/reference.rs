@@ -135,75 +135,13 @@ pub fn random_reference(
     check_spec(spec, random_duration_s, sample_rate_hz)?;
     let fs = sample_rate_hz;
     let (rms, [lo, hi]) = (spec.rms.unwrap_or(1.0), spec.band_hz.unwrap_or([0.0, 1.0]));
-    let n_seg = (random_duration_s * fs).round() as usize;
-    let d = n_seg as f64 / fs;
-    let rest = (REST_S * fs).round() as usize;
-    let (k_lo, k_hi) = band_bins(lo, hi, d, n_seg);
+    let seg = RandomSegment::new(lo, hi, random_duration_s, fs);
     let mut rng = ChaCha8Rng::seed_from_u64(seed);
     rng.set_stream(stream);
-    // Spectra of displacement, velocity and acceleration over the segment's bins.
-    let nb = n_seg / 2 + 1;
-    let mut spec_x = vec![Complex::new(0.0, 0.0); nb];
-    let mut spec_v = spec_x.clone();
-    let mut spec_a = spec_x.clone();
-    for k in k_lo..=k_hi {
-        let phi = rng.gen::<f64>() * 2.0 * PI;
-        let e = Complex::new(phi.cos(), phi.sin());
-        let w = 2.0 * PI * k as f64 / d;
-        let iw = Complex::new(0.0, w);
-        match spec.control {
-            Control::Displacement => {
-                spec_x[k] = e;
-                spec_v[k] = e * iw;
-                spec_a[k] = e * (-w * w);
-            }
-            Control::Acceleration => {
-                spec_a[k] = e;
-                spec_v[k] = e / iw;
-                spec_x[k] = e / (-w * w);
-            }
-        }
-    }
-    let mut planner = RealFftPlanner::<f64>::new();
-    let c2r = planner.plan_fft_inverse(n_seg);
-    let mut g = [vec![0.0; n_seg], vec![0.0; n_seg], vec![0.0; n_seg]];
-    for (out, sp) in g.iter_mut().zip([&mut spec_x, &mut spec_v, &mut spec_a]) {
-        // DC and Nyquist bins are zero, so the input is a valid real spectrum.
-        c2r.process(sp, out).map_err(|e| SynthError::BadTest {
-            name: spec.name.clone(),
-            message: format!("inverse FFT: {e}"),
-        })?;
-    }
-    let [g0, g1, g2] = g;
-    let mut r = ReferenceSignal::zeros(n_seg + 2 * rest);
-    let (mut sum2, mut count) = (0.0, 0usize);
-    for n in 0..n_seg {
-        let tau = n as f64 / fs;
-        let (w, w1, w2) = if tau < FADE_S {
-            fade(tau, FADE_S)
-        } else if d - tau < FADE_S {
-            let (w, w1, w2) = fade(d - tau, FADE_S);
-            (w, -w1, w2)
-        } else {
-            (1.0, 0.0, 0.0)
-        };
-        // product rule: r = w g, r' = w' g + w g', r'' = w'' g + 2 w' g' + w g''
-        let x = w * g0[n];
-        let v = w1 * g0[n] + w * g1[n];
-        let a = w2 * g0[n] + 2.0 * w1 * g1[n] + w * g2[n];
-        r.displacement_m[rest + n] = x;
-        r.velocity_m_s[rest + n] = v;
-        r.acceleration_m_s2[rest + n] = a;
-        if w == 1.0 {
-            let c = match spec.control {
-                Control::Displacement => x,
-                Control::Acceleration => a,
-            };
-            sum2 += c * c;
-            count += 1;
-        }
-    }
-    let scale = rms / (sum2 / count.max(1) as f64).sqrt();
+    let spectra = seg.spectra(spec.control, &mut rng);
+    let g = inverse_ffts(spec, seg.n_seg, spectra)?;
+    let (mut r, rms_unit) = seg.faded(spec.control, fs, g);
+    let scale = rms / rms_unit;
     for ch in [
         &mut r.displacement_m,
         &mut r.velocity_m_s,
@@ -214,6 +152,126 @@ pub fn random_reference(
         }
     }
     Ok(r)
+}
+
+/// The band-limited part of a random reference: its samples and length, the rest
+/// before and after it, and its FFT bins inside the band.
+struct RandomSegment {
+    n_seg: usize,
+    /// The segment's length, s: bin `k` is at frequency `k / d`.
+    d: f64,
+    /// Samples at rest before and after the segment.
+    rest: usize,
+    k_lo: usize,
+    k_hi: usize,
+}
+
+impl RandomSegment {
+    /// The segment of `random_duration_s` at `fs` for the band `[lo, hi]` Hz.
+    fn new(lo: f64, hi: f64, random_duration_s: f64, fs: f64) -> Self {
+        let n_seg = (random_duration_s * fs).round() as usize;
+        let d = n_seg as f64 / fs;
+        let rest = (REST_S * fs).round() as usize;
+        let (k_lo, k_hi) = band_bins(lo, hi, d, n_seg);
+        RandomSegment {
+            n_seg,
+            d,
+            rest,
+            k_lo,
+            k_hi,
+        }
+    }
+
+    /// Spectra of displacement, velocity and acceleration over the segment's bins: one
+    /// random phase per bin of the band, drawn from `rng` in bin order; the controlled
+    /// channel has unit amplitude, the others follow by `i w`.
+    fn spectra(&self, control: Control, rng: &mut ChaCha8Rng) -> [Vec<Complex<f64>>; 3] {
+        let nb = self.n_seg / 2 + 1;
+        let mut spec_x = vec![Complex::new(0.0, 0.0); nb];
+        let mut spec_v = spec_x.clone();
+        let mut spec_a = spec_x.clone();
+        for k in self.k_lo..=self.k_hi {
+            let phi = rng.gen::<f64>() * 2.0 * PI;
+            let e = Complex::new(phi.cos(), phi.sin());
+            let w = 2.0 * PI * k as f64 / self.d;
+            let iw = Complex::new(0.0, w);
+            match control {
+                Control::Displacement => {
+                    spec_x[k] = e;
+                    spec_v[k] = e * iw;
+                    spec_a[k] = e * (-w * w);
+                }
+                Control::Acceleration => {
+                    spec_a[k] = e;
+                    spec_v[k] = e / iw;
+                    spec_x[k] = e / (-w * w);
+                }
+            }
+        }
+        [spec_x, spec_v, spec_a]
+    }
+
+    /// The reference: the rest, the signals `g = [g, g', g'']` under the fade window
+    /// (product rule), the rest again; and the RMS of the controlled channel where the
+    /// window is 1 (to scale it to the test's rms).
+    fn faded(&self, control: Control, fs: f64, g: [Vec<f64>; 3]) -> (ReferenceSignal, f64) {
+        let [g0, g1, g2] = g;
+        let rest = self.rest;
+        let mut r = ReferenceSignal::zeros(self.n_seg + 2 * rest);
+        let (mut sum2, mut count) = (0.0, 0usize);
+        for n in 0..self.n_seg {
+            let tau = n as f64 / fs;
+            let (w, w1, w2) = fade_in_out(tau, self.d, FADE_S);
+            // product rule: r = w g, r' = w' g + w g', r'' = w'' g + 2 w' g' + w g''
+            let x = w * g0[n];
+            let v = w1 * g0[n] + w * g1[n];
+            let a = w2 * g0[n] + 2.0 * w1 * g1[n] + w * g2[n];
+            r.displacement_m[rest + n] = x;
+            r.velocity_m_s[rest + n] = v;
+            r.acceleration_m_s2[rest + n] = a;
+            if w == 1.0 {
+                let c = match control {
+                    Control::Displacement => x,
+                    Control::Acceleration => a,
+                };
+                sum2 += c * c;
+                count += 1;
+            }
+        }
+        (r, (sum2 / count.max(1) as f64).sqrt())
+    }
+}
+
+/// The real signals of the three spectra, each by an inverse FFT of length `n_seg`.
+fn inverse_ffts(
+    spec: &TestSpec,
+    n_seg: usize,
+    mut spectra: [Vec<Complex<f64>>; 3],
+) -> Result<[Vec<f64>; 3], SynthError> {
+    let mut planner = RealFftPlanner::<f64>::new();
+    let c2r = planner.plan_fft_inverse(n_seg);
+    let mut g = [vec![0.0; n_seg], vec![0.0; n_seg], vec![0.0; n_seg]];
+    for (out, sp) in g.iter_mut().zip(spectra.iter_mut()) {
+        // DC and Nyquist bins are zero, so the input is a valid real spectrum.
+        c2r.process(sp, out).map_err(|e| SynthError::BadTest {
+            name: spec.name.clone(),
+            message: format!("inverse FFT: {e}"),
+        })?;
+    }
+    Ok(g)
+}
+
+/// The window at `tau` seconds into a motion of `length` s that fades in over its first
+/// `tf` s and out over its last `tf` s (1 between), and its first two derivatives.
+fn fade_in_out(tau: f64, length: f64, tf: f64) -> (f64, f64, f64) {
+    if tau < tf {
+        fade(tau, tf)
+    } else if length - tau < tf {
+        let (w, w1, w2) = fade(length - tau, tf);
+        (w, -w1, w2)
+    } else {
+        (1.0, 0.0, 0.0)
+    }
 }
 
 /// Sine reference with half-period raised-cosine ramps (see module doc).
@@ -232,14 +290,7 @@ pub fn sine_reference(spec: &TestSpec, sample_rate_hz: f64) -> Result<ReferenceS
         if tau <= 0.0 || tau >= motion {
             continue;
         }
-        let (e, e1, e2) = if tau < ramp {
-            fade(tau, ramp)
-        } else if motion - tau < ramp {
-            let (e, e1, e2) = fade(motion - tau, ramp);
-            (e, -e1, e2)
-        } else {
-            (1.0, 0.0, 0.0)
-        };
+        let (e, e1, e2) = fade_in_out(tau, motion, ramp);
         let (s, c) = (w * tau).sin_cos();
         r.displacement_m[k] = amp * e * s;
         r.velocity_m_s[k] = amp * (e1 * s + e * w * c);
