@@ -208,81 +208,16 @@ fn read_columns(
     file: &str,
     options: &ReadOptions,
 ) -> Result<GroundMotion, MotionError> {
-    let err_at = |line: usize, message: String| MotionError::Line {
-        file: file.to_string(),
-        line,
-        message,
-    };
-    let mut rows: Vec<(usize, Vec<f64>)> = Vec::new();
-    let mut header: Option<(usize, Vec<String>)> = None;
     let lines: Vec<&str> = lines
         .iter()
         .map(|l| l.trim_start_matches('\u{feff}'))
         .collect();
     let sep = decimal_of(&lines, options.decimal_comma);
-    for (i, line) in lines.iter().enumerate() {
-        if is_comment(line) {
-            continue;
-        }
-        match numbers_in(line, sep) {
-            Some(v) => rows.push((i + 1, v)),
-            None if header.is_none() && rows.is_empty() => {
-                header = Some((
-                    i + 1,
-                    cells(line, sep)
-                        .map(|c| c.trim_matches('"').to_string())
-                        .collect(),
-                ))
-            }
-            None => {
-                let bad = cells(line, sep)
-                    .find(|c| number(c, sep).is_none())
-                    .unwrap_or("");
-                return Err(err_at(i + 1, format!("`{bad}` is not a number")));
-            }
-        }
-    }
-    let width = match (&header, rows.first()) {
-        (Some((_, names)), _) => names.len(),
-        (None, Some((_, r))) => r.len(),
-        (None, None) => return Err(err_at(1, "no rows of numbers".into())),
-    };
-    if let Some((line, r)) = rows.iter().find(|(_, r)| r.len() != width) {
-        return Err(err_at(
-            *line,
-            format!("{} values where the file's first row has {width}", r.len()),
-        ));
-    }
-    let layout = ColumnLayout::choose(header.as_ref(), width, file, options)?;
-    let acceleration: Vec<f64> = rows
-        .iter()
-        .map(|(_, r)| r[layout.acceleration] * layout.unit.to_m_s2())
-        .collect();
-    if let Some((line, _)) = rows
-        .iter()
-        .find(|(_, r)| !r[layout.acceleration].is_finite())
-    {
-        return Err(err_at(*line, "the acceleration is not finite".into()));
-    }
-    let (step_s, step_from) = match layout.time {
-        Some(t) => {
-            let times: Vec<(usize, f64)> = rows.iter().map(|(l, r)| (*l, r[t])).collect();
-            let step = uniform_step(&times, file, options.step_s);
-            (
-                step.map_err(|e| with_comma_hint(e, &lines, sep))?,
-                "its time column",
-            )
-        }
-        None => match options.step_s {
-            Some(dt) => (dt, "--dt"),
-            None => {
-                return Err(MotionError::Read {
-                    file: file.to_string(),
-                    message: "no time column: give the time step with --dt (e.g. --dt 0.01)".into(),
-                })
-            }
-        },
-    };
+    let table = ColumnRows::read(&lines, sep, file)?;
+    let width = table.width(file)?;
+    let layout = ColumnLayout::choose(table.header.as_ref(), width, file, options)?;
+    let acceleration = table.acceleration(&layout, file)?;
+    let (step_s, step_from) = table.step(layout.time, &lines, sep, file, options)?;
     Ok(GroundMotion {
         step_s,
         source: format!(
@@ -297,6 +232,123 @@ fn read_columns(
         ),
         acceleration_m_s2: acceleration,
     })
+}
+
+/// An error at line `line` (1-based) of `file`.
+pub(super) fn line_error(file: &str, line: usize, message: String) -> MotionError {
+    MotionError::Line {
+        file: file.to_string(),
+        line,
+        message,
+    }
+}
+
+/// A column file as read: its header line of names, if any, and its rows of numbers,
+/// each with its line number (1-based).
+struct ColumnRows {
+    header: Option<(usize, Vec<String>)>,
+    rows: Vec<(usize, Vec<f64>)>,
+}
+
+impl ColumnRows {
+    /// Read `lines` with the decimal separator `sep`, comments skipped: a line that is
+    /// not numbers before any row is the header; after that, the first cell that is not
+    /// a number is an error at its line.
+    fn read(lines: &[&str], sep: Decimal, file: &str) -> Result<Self, MotionError> {
+        let mut rows: Vec<(usize, Vec<f64>)> = Vec::new();
+        let mut header: Option<(usize, Vec<String>)> = None;
+        for (i, line) in lines.iter().enumerate() {
+            if is_comment(line) {
+                continue;
+            }
+            match numbers_in(line, sep) {
+                Some(v) => rows.push((i + 1, v)),
+                None if header.is_none() && rows.is_empty() => {
+                    header = Some((
+                        i + 1,
+                        cells(line, sep)
+                            .map(|c| c.trim_matches('"').to_string())
+                            .collect(),
+                    ))
+                }
+                None => {
+                    let bad = cells(line, sep)
+                        .find(|c| number(c, sep).is_none())
+                        .unwrap_or("");
+                    return Err(line_error(file, i + 1, format!("`{bad}` is not a number")));
+                }
+            }
+        }
+        Ok(ColumnRows { header, rows })
+    }
+
+    /// The number of columns: the header's, else the first row's; every row must have
+    /// as many values.
+    fn width(&self, file: &str) -> Result<usize, MotionError> {
+        let width = match (&self.header, self.rows.first()) {
+            (Some((_, names)), _) => names.len(),
+            (None, Some((_, r))) => r.len(),
+            (None, None) => return Err(line_error(file, 1, "no rows of numbers".into())),
+        };
+        if let Some((line, r)) = self.rows.iter().find(|(_, r)| r.len() != width) {
+            return Err(line_error(
+                file,
+                *line,
+                format!("{} values where the file's first row has {width}", r.len()),
+            ));
+        }
+        Ok(width)
+    }
+
+    /// The acceleration column in m/s^2; every value of it must be finite.
+    fn acceleration(&self, layout: &ColumnLayout, file: &str) -> Result<Vec<f64>, MotionError> {
+        let acceleration: Vec<f64> = self
+            .rows
+            .iter()
+            .map(|(_, r)| r[layout.acceleration] * layout.unit.to_m_s2())
+            .collect();
+        if let Some((line, _)) = self
+            .rows
+            .iter()
+            .find(|(_, r)| !r[layout.acceleration].is_finite())
+        {
+            return Err(line_error(
+                file,
+                *line,
+                "the acceleration is not finite".into(),
+            ));
+        }
+        Ok(acceleration)
+    }
+
+    /// The time step and where it comes from: the uniform step of the time column `time`
+    /// (hinting at decimal commas where `lines` may be one column of them), else `--dt`.
+    fn step(
+        &self,
+        time: Option<usize>,
+        lines: &[&str],
+        sep: Decimal,
+        file: &str,
+        options: &ReadOptions,
+    ) -> Result<(f64, &'static str), MotionError> {
+        match time {
+            Some(t) => {
+                let times: Vec<(usize, f64)> = self.rows.iter().map(|(l, r)| (*l, r[t])).collect();
+                let step = uniform_step(&times, file, options.step_s);
+                Ok((
+                    step.map_err(|e| with_comma_hint(e, lines, sep))?,
+                    "its time column",
+                ))
+            }
+            None => match options.step_s {
+                Some(dt) => Ok((dt, "--dt")),
+                None => Err(MotionError::Read {
+                    file: file.to_string(),
+                    message: "no time column: give the time step with --dt (e.g. --dt 0.01)".into(),
+                }),
+            },
+        }
+    }
 }
 
 /// `e` with a hint when the file may be one column of decimal commas (`0,5` on every
@@ -419,11 +471,7 @@ pub(super) fn uniform_step(
     file: &str,
     given: Option<f64>,
 ) -> Result<f64, MotionError> {
-    let err_at = |line: usize, message: String| MotionError::Line {
-        file: file.to_string(),
-        line,
-        message,
-    };
+    let err_at = |line: usize, message: String| line_error(file, line, message);
     let (Some(&(_, t0)), Some(&(last_line, t1))) = (times.first(), times.last()) else {
         return Err(MotionError::Read {
             file: file.to_string(),
