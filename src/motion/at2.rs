@@ -2,7 +2,7 @@
 //! component, units, `NPTS= n, DT= dt SEC`, or the older `n dt NPTS, DT`), then the
 //! samples, several to a line.
 
-use super::read::{numbers, AccelerationUnit, GroundMotion, ReadOptions};
+use super::read::{line_error, numbers, AccelerationUnit, GroundMotion, ReadOptions};
 use super::MotionError;
 
 /// Lines before the samples in an AT2 file.
@@ -14,77 +14,9 @@ pub fn read_at2(
     file: &str,
     options: &ReadOptions,
 ) -> Result<GroundMotion, MotionError> {
-    let err_at = |line: usize, message: String| MotionError::Line {
-        file: file.to_string(),
-        line,
-        message,
-    };
-    if lines.len() <= HEADER_LINES {
-        return Err(err_at(
-            lines.len().max(1),
-            "an AT2 file has four header lines and then the samples".into(),
-        ));
-    }
-    let unit = header_unit(lines[2]).ok_or_else(|| {
-        err_at(
-            3,
-            format!(
-                "no unit of acceleration (G, CM/S/S or M/S/S) in `{}`",
-                lines[2].trim()
-            ),
-        )
-    })?;
-    if let Some(u) = options.unit.filter(|u| *u != unit) {
-        return Err(err_at(
-            3,
-            format!(
-                "--units {} contradicts the header ({})",
-                u.name(),
-                unit.name()
-            ),
-        ));
-    }
-    let (npts, dt) = npts_dt(lines[3]).ok_or_else(|| {
-        err_at(
-            4,
-            format!(
-                "expected `NPTS= n, DT= step SEC`, found `{}`",
-                lines[3].trim()
-            ),
-        )
-    })?;
-    if let Some(given) = options.step_s {
-        if (given - dt).abs() > 1e-9 * dt {
-            return Err(err_at(
-                4,
-                format!("--dt {given} s contradicts the header's DT = {dt} s"),
-            ));
-        }
-    }
-    let mut samples = Vec::with_capacity(npts.min(1 << 24));
-    for (i, line) in lines.iter().enumerate().skip(HEADER_LINES) {
-        let values =
-            numbers(line).ok_or_else(|| err_at(i + 1, "a value is not a number".into()))?;
-        if let Some(v) = values.iter().find(|v| !v.is_finite()) {
-            return Err(err_at(i + 1, format!("{v} is not a finite acceleration")));
-        }
-        samples.extend(values.iter().map(|v| v * unit.to_m_s2()));
-        if samples.len() > npts {
-            return Err(err_at(
-                i + 1,
-                format!("more samples than the header's NPTS = {npts}"),
-            ));
-        }
-    }
-    if samples.len() < npts {
-        return Err(err_at(
-            lines.len(),
-            format!(
-                "{} samples where the header says NPTS = {npts}",
-                samples.len()
-            ),
-        ));
-    }
+    let header = At2Header::read(lines, file, options)?;
+    let samples = header.samples(lines, file)?;
+    let At2Header { unit, npts, dt } = header;
     Ok(GroundMotion {
         step_s: dt,
         acceleration_m_s2: samples,
@@ -94,6 +26,123 @@ pub fn read_at2(
             unit.name()
         ),
     })
+}
+
+/// What an AT2 file's header says: the acceleration's unit, the number of samples and
+/// the time step, s.
+struct At2Header {
+    unit: AccelerationUnit,
+    npts: usize,
+    dt: f64,
+}
+
+impl At2Header {
+    /// Read the header (the unit on its third line, NPTS and DT on its fourth), each
+    /// checked against `--units` and `--dt` where given.
+    fn read(lines: &[&str], file: &str, options: &ReadOptions) -> Result<Self, MotionError> {
+        if lines.len() <= HEADER_LINES {
+            return Err(line_error(
+                file,
+                lines.len().max(1),
+                "an AT2 file has four header lines and then the samples".into(),
+            ));
+        }
+        let unit = checked_unit(lines[2], file, options)?;
+        let (npts, dt) = checked_npts_dt(lines[3], file, options)?;
+        Ok(At2Header { unit, npts, dt })
+    }
+
+    /// The samples after the header in m/s^2: every value a finite number, exactly
+    /// NPTS of them (more is an error at the line that passes NPTS).
+    fn samples(&self, lines: &[&str], file: &str) -> Result<Vec<f64>, MotionError> {
+        let (unit, npts) = (self.unit, self.npts);
+        let mut samples = Vec::with_capacity(npts.min(1 << 24));
+        for (i, line) in lines.iter().enumerate().skip(HEADER_LINES) {
+            let values = numbers(line)
+                .ok_or_else(|| line_error(file, i + 1, "a value is not a number".into()))?;
+            if let Some(v) = values.iter().find(|v| !v.is_finite()) {
+                return Err(line_error(
+                    file,
+                    i + 1,
+                    format!("{v} is not a finite acceleration"),
+                ));
+            }
+            samples.extend(values.iter().map(|v| v * unit.to_m_s2()));
+            if samples.len() > npts {
+                return Err(line_error(
+                    file,
+                    i + 1,
+                    format!("more samples than the header's NPTS = {npts}"),
+                ));
+            }
+        }
+        if samples.len() < npts {
+            return Err(line_error(
+                file,
+                lines.len(),
+                format!(
+                    "{} samples where the header says NPTS = {npts}",
+                    samples.len()
+                ),
+            ));
+        }
+        Ok(samples)
+    }
+}
+
+/// The unit on the header's third line `line`, which `--units` must not contradict.
+fn checked_unit(
+    line: &str,
+    file: &str,
+    options: &ReadOptions,
+) -> Result<AccelerationUnit, MotionError> {
+    let unit = header_unit(line).ok_or_else(|| {
+        line_error(
+            file,
+            3,
+            format!(
+                "no unit of acceleration (G, CM/S/S or M/S/S) in `{}`",
+                line.trim()
+            ),
+        )
+    })?;
+    if let Some(u) = options.unit.filter(|u| *u != unit) {
+        return Err(line_error(
+            file,
+            3,
+            format!(
+                "--units {} contradicts the header ({})",
+                u.name(),
+                unit.name()
+            ),
+        ));
+    }
+    Ok(unit)
+}
+
+/// NPTS and DT on the header's fourth line `line`; `--dt` must agree with DT.
+fn checked_npts_dt(
+    line: &str,
+    file: &str,
+    options: &ReadOptions,
+) -> Result<(usize, f64), MotionError> {
+    let (npts, dt) = npts_dt(line).ok_or_else(|| {
+        line_error(
+            file,
+            4,
+            format!("expected `NPTS= n, DT= step SEC`, found `{}`", line.trim()),
+        )
+    })?;
+    if let Some(given) = options.step_s {
+        if (given - dt).abs() > 1e-9 * dt {
+            return Err(line_error(
+                file,
+                4,
+                format!("--dt {given} s contradicts the header's DT = {dt} s"),
+            ));
+        }
+    }
+    Ok((npts, dt))
 }
 
 /// The unit named on the header's third line.
