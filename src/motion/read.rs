@@ -381,6 +381,8 @@ struct ColumnLayout {
 }
 
 impl ColumnLayout {
+    /// Which columns hold the time and the acceleration, and the acceleration's unit;
+    /// errors name `file`.
     fn choose(
         header: Option<&(usize, Vec<String>)>,
         width: usize,
@@ -400,47 +402,10 @@ impl ColumnLayout {
             .iter()
             .position(|n| matches!(n.as_str(), "time_s" | "time" | "t" | "t_s" | "time [s]"))
             .or((header.is_none() && width == 2).then_some(0));
-        let acceleration = match &options.column {
-            Some(c) => match c.parse::<usize>() {
-                Ok(k) if (1..=width).contains(&k) => k - 1,
-                Ok(k) => return Err(err(format!("--column {k}: the file has {width} columns"))),
-                Err(_) => lower.iter().position(|n| *n == c.to_ascii_lowercase()).ok_or_else(|| {
-                    err(format!("--column `{c}`: no such column (columns: {})", names.join(", ")))
-                })?,
-            },
-            None => match (header.is_some(), width) {
-                (false, 1) => 0,
-                (false, 2) => 1,
-                _ => ["acceleration_m_s2", "ref_acceleration_m_s2", "acceleration_g", "acceleration"]
-                    .iter()
-                    .find_map(|want| lower.iter().position(|n| n == want))
-                    .ok_or_else(|| {
-                        err(format!(
-                            "which column is the acceleration? give --column NAME or NUMBER (columns: {})",
-                            names.join(", ")
-                        ))
-                    })?,
-            },
-        };
-        let named_unit = unit_from_name(&lower[acceleration]);
-        let (unit, unit_from) = match (named_unit, options.unit) {
-            (Some(n), Some(u)) if n != u => {
-                return Err(err(format!(
-                    "--units {} contradicts the column name `{}` ({})",
-                    u.name(),
-                    names[acceleration],
-                    n.name()
-                )))
-            }
-            (Some(n), _) => (n, "from the column name"),
-            (None, Some(u)) => (u, "from --units"),
-            (None, None) => {
-                return Err(err(format!(
-                    "the unit of `{}` is not known: give --units g, m/s2 or cm/s2",
-                    names[acceleration]
-                )))
-            }
-        };
+        let acceleration =
+            acceleration_column(header.is_some(), width, &names, &lower, options, &err)?;
+        let (unit, unit_from) =
+            acceleration_unit(&names[acceleration], &lower[acceleration], options, &err)?;
         Ok(ColumnLayout {
             time,
             acceleration,
@@ -448,6 +413,74 @@ impl ColumnLayout {
             unit,
             unit_from,
         })
+    }
+}
+
+/// The acceleration's column among `width`: `--column` by number or name, else the only
+/// data column of a headerless file, else the first of the usual names.
+fn acceleration_column(
+    has_header: bool,
+    width: usize,
+    names: &[String],
+    lower: &[String],
+    options: &ReadOptions,
+    err: &dyn Fn(String) -> MotionError,
+) -> Result<usize, MotionError> {
+    Ok(match &options.column {
+        Some(c) => match c.parse::<usize>() {
+            Ok(k) if (1..=width).contains(&k) => k - 1,
+            Ok(k) => return Err(err(format!("--column {k}: the file has {width} columns"))),
+            Err(_) => lower
+                .iter()
+                .position(|n| *n == c.to_ascii_lowercase())
+                .ok_or_else(|| {
+                    err(format!(
+                        "--column `{c}`: no such column (columns: {})",
+                        names.join(", ")
+                    ))
+                })?,
+        },
+        None => match (has_header, width) {
+            (false, 1) => 0,
+            (false, 2) => 1,
+            _ => [
+                "acceleration_m_s2",
+                "ref_acceleration_m_s2",
+                "acceleration_g",
+                "acceleration",
+            ]
+            .iter()
+            .find_map(|want| lower.iter().position(|n| n == want))
+            .ok_or_else(|| {
+                err(format!(
+                    "which column is the acceleration? give --column NAME or NUMBER (columns: {})",
+                    names.join(", ")
+                ))
+            })?,
+        },
+    })
+}
+
+/// The acceleration's unit and where it came from: the column's name (`lower` is it in
+/// lower case) or `--units`; both given, they must agree.
+fn acceleration_unit(
+    name: &str,
+    lower: &str,
+    options: &ReadOptions,
+    err: &dyn Fn(String) -> MotionError,
+) -> Result<(AccelerationUnit, &'static str), MotionError> {
+    match (unit_from_name(lower), options.unit) {
+        (Some(n), Some(u)) if n != u => Err(err(format!(
+            "--units {} contradicts the column name `{}` ({})",
+            u.name(),
+            name,
+            n.name()
+        ))),
+        (Some(n), _) => Ok((n, "from the column name")),
+        (None, Some(u)) => Ok((u, "from --units")),
+        (None, None) => Err(err(format!(
+            "the unit of `{name}` is not known: give --units g, m/s2 or cm/s2"
+        ))),
     }
 }
 
