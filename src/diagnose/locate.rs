@@ -9,7 +9,7 @@ use super::calibration::{removed_by, sensor_findings, RemovedBy, SensorFinding};
 use super::output::{PartRows, UnexplainedCell};
 use super::part::Part;
 use super::residuals::{
-    channel_bands, predict_draws, readings, CellBands, Channel, NoiseFloor, PerChannel,
+    channel_bands, predict_draws, readings, CellBands, Channel, NoiseFloor, PerChannel, Prediction,
     HELDOUT_REALISATIONS,
 };
 use super::EXPLAINED_RATIO;
@@ -72,10 +72,21 @@ pub(super) fn unexplained_cells(
         .collect();
     worst.sort_by(|a, b| b.2.total_cmp(&a.2));
     worst.truncate(MAX_UNEXPLAINED_CELLS);
-    worst
-        .into_iter()
-        .filter_map(|(i, ch, residual)| locate(p, c, i, ch, residual, noise))
-        .collect()
+    // one prediction per test, shared by its cells (several channels of a test are often
+    // listed), one test at a time (a prediction holds every run of its test)
+    let mut tests: Vec<usize> = worst.iter().map(|w| w.0).collect();
+    tests.sort_unstable();
+    tests.dedup();
+    let mut located: Vec<(usize, UnexplainedCell)> = Vec::new();
+    for i in tests {
+        // the report cell's bands with the draws its residual was measured with
+        let pred = predict_draws(p, c, i, Part::Whole, noise, HELDOUT_REALISATIONS);
+        for (k, &(_, ch, residual)) in worst.iter().enumerate().filter(|(_, w)| w.0 == i) {
+            located.extend(locate(&pred, c, i, ch, residual, noise).map(|u| (k, u)));
+        }
+    }
+    located.sort_by_key(|(k, _)| *k);
+    located.into_iter().map(|(_, u)| u).collect()
 }
 
 /// The [`SensorFinding`]s of the located `cells` ([`sensor_findings`]).
@@ -90,19 +101,18 @@ pub(super) fn findings(c: &Campaign, cells: &[UnexplainedCell]) -> Vec<SensorFin
     sensor_findings(&rated)
 }
 
-/// One cell located: its worst band and its dependences.
+/// One cell of test `i` located from the model's prediction `pred` of it: its worst band
+/// and its dependences.
 fn locate(
-    p: &Params,
+    pred: &Prediction,
     c: &Campaign,
     i: usize,
     ch: Channel,
     residual: f64,
     noise: &NoiseFloor,
 ) -> Option<UnexplainedCell> {
-    // the report cell's bands with the draws its residual was measured with
-    let pred = predict_draws(p, c, i, Part::Whole, noise, HELDOUT_REALISATIONS);
     let r = &c.records[i];
-    let worst = match channel_bands(c, i, &pred, noise, Part::Report, ch) {
+    let worst = match channel_bands(c, i, pred, noise, Part::Report, ch) {
         CellBands::Absent => return None,
         // a diverged run has no band to name
         CellBands::Diverged => None,
