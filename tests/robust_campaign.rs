@@ -289,3 +289,17 @@ fn a_baseline_stopped_in_the_report_quarter_names_no_cause() {
         "{why}"
     );
 }
+
+/// T1's valve command sign-flipped (found by the property test above): no catalogue
+/// effect explains a corrupted channel. A deadband "explained" it by predicting a spread
+/// 95 times the residual while its noise-free run added deterministic error; it must be
+/// refused (the spread rule), and no cause named.
+#[test]
+fn a_sign_flipped_valve_command_names_no_cause() {
+    let mut c = base().clone();
+    apply(&mut c, &Mutation::Sign(5, 2));
+    let d = shaketable::diagnose::diagnose(&c, shaketable::diagnose::Effort::Full, None).unwrap();
+    let named: Vec<_> = d.causes.iter().map(|c| c.effect.name()).collect();
+    assert!(d.cause().is_none() && named.is_empty(), "{named:?}");
+    assert!(!d.explained);
+}

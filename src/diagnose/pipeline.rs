@@ -328,7 +328,9 @@ mod rounds;
 mod select;
 pub(super) use rounds::diagnose_with;
 use select::best_candidate;
-pub(super) use select::{COHERENT_MAJORITY, MIN_COHERENT_REMOVED, UNRESOLVED_CHANGE};
+pub(super) use select::{
+    COHERENT_MAJORITY, MAX_COHERENT_LEFT, MIN_COHERENT_REMOVED, UNRESOLVED_CHANGE,
+};
 
 #[cfg(test)]
 mod tests;

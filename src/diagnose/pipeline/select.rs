@@ -25,6 +25,13 @@ pub(in crate::diagnose) const COHERENT_MAJORITY: f64 = 0.5;
 /// tenth: the true effects seen remove 47 % (a weak deadband beside a specimen) to all of
 /// it; the UTFSM damper's stick-slip, explaining by chatter, removed 1 %.
 pub(in crate::diagnose) const MIN_COHERENT_REMOVED: f64 = 0.1;
+/// A cause's noise-free run leaves at most this many times the current model's *whole*
+/// residual power as coherent (deterministic) error on the cells it is credited with.
+/// One: more deterministic error than the current model has in all would be an error it
+/// adds, which only its predicted spread can hide (a deadband "explaining" a sign-flipped
+/// valve command by a spread 95 times the residual). True causes seen leave 0.00005 (a
+/// foundation) to 0.42 (free play's chaotic impacts) of it.
+pub(in crate::diagnose) const MAX_COHERENT_LEFT: f64 = 1.0;
 
 /// The candidate a search polishes and judges: the best-scoring one that is physical and
 /// evidence of its effect, else the best-scoring one (then a partial explanation at
@@ -53,10 +60,21 @@ pub(super) struct CoherentSplit {
 
 /// Why a candidate is credited only with the spread it predicts, if it is: the residual
 /// it is credited with is mostly coherent with the reference (deterministic: no predicted
-/// spread holds it), and its noise-free run removes too little of that coherent part.
-/// Chatter and impacts, whose phase is their own, are not coherent (3 % on a true
-/// stick-slip, 12 % on a true free play), and the score may credit their spread.
+/// spread holds it), and its noise-free run removes too little of that coherent part; or
+/// its noise-free run leaves more coherent error than the current model's whole residual
+/// ([`MAX_COHERENT_LEFT`]), whatever that residual's share. Chatter and impacts, whose
+/// phase is their own, are not coherent (3 % on a true stick-slip, 12 % on a true free
+/// play), and the score may credit their spread.
 pub(super) fn spread_credited(split: &CoherentSplit) -> Option<String> {
+    let left = split.candidate_coherent / split.current_total;
+    if left > MAX_COHERENT_LEFT {
+        return Some(format!(
+            "its noise-free run leaves a residual coherent with the reference \
+             (deterministic) of {left:.1} times the whole residual power of the model it \
+             extends: it adds a deterministic error and is credited only by the spread \
+             it predicts"
+        ));
+    }
     let share = split.current_coherent / split.current_total;
     let removed = 1.0 - split.candidate_coherent / split.current_coherent;
     (share > COHERENT_MAJORITY && !(removed >= MIN_COHERENT_REMOVED)).then(|| {

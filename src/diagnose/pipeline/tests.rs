@@ -75,7 +75,8 @@ fn the_verdict_needs_gain_physics_and_evidence() {
 }
 
 /// A mostly coherent residual (deterministic) must lose a tenth of its coherent power to
-/// the cause; a mostly incoherent one (chatter, impacts) may be credited to spread.
+/// the cause; a mostly incoherent one (chatter, impacts) may be credited to spread unless
+/// the cause leaves more coherent error than the whole residual it is credited with.
 #[test]
 fn a_deterministic_residual_is_not_credited_to_spread() {
     let split = |coherent: f64, total: f64, after: f64| CoherentSplit {
@@ -90,6 +91,12 @@ fn a_deterministic_residual_is_not_credited_to_spread() {
     assert_eq!(spread_credited(&split(5.84e6, 6.60e6, 3.12e6)), None);
     // a true stick-slip: 3 % coherent, whatever its run does to that part
     assert_eq!(spread_credited(&split(3.3, 120.0, 3.3)), None);
+    // a deadband on a sign-flipped valve command: 13 % coherent, but its run leaves 95
+    // times the whole current residual as coherent error
+    let why = spread_credited(&split(18.9, 146.2, 13909.0)).unwrap();
+    assert!(why.contains("95.1 times"), "{why}");
+    // a true free play: 74 % coherent, its run leaves 42 % of the whole (44 % removed)
+    assert_eq!(spread_credited(&split(8.85e5, 1.19e6, 4.97e5)), None);
     // no estimate at all (every test too short): nothing is claimed against it
     assert_eq!(spread_credited(&split(0.0, 0.0, 0.0)), None);
 }
