@@ -97,6 +97,8 @@ fn a_deterministic_residual_is_not_credited_to_spread() {
     assert!(why.contains("95.1 times"), "{why}");
     // a true free play: 74 % coherent, its run leaves 42 % of the whole (44 % removed)
     assert_eq!(spread_credited(&split(8.85e5, 1.19e6, 4.97e5)), None);
+    // seed 703's 1.5-mm free play: 16 % coherent, its run leaves 1.03 times the whole
+    assert_eq!(spread_credited(&split(1.061e4, 6.798e4, 6.975e4)), None);
     // no estimate at all (every test too short): nothing is claimed against it
     assert_eq!(spread_credited(&split(0.0, 0.0, 0.0)), None);
 }
