@@ -291,9 +291,9 @@ fn a_baseline_stopped_in_the_report_quarter_names_no_cause() {
 }
 
 /// T1's valve command sign-flipped (found by the property test above): no catalogue
-/// effect explains a corrupted channel. A deadband "explained" it by predicting a spread
-/// 95 times the residual while its noise-free run added deterministic error; it must be
-/// refused (the spread rule), and no cause named.
+/// effect explains a corrupted channel. A deadband "explained" it by the spread it
+/// predicts while its noise-free run left 95 times the residual as coherent
+/// (deterministic) error; it must be refused (the spread rule), and no cause named.
 #[test]
 fn a_sign_flipped_valve_command_names_no_cause() {
     let mut c = base().clone();

@@ -61,8 +61,8 @@ pub(super) struct CoherentSplit {
 /// Why a candidate is credited only with the spread it predicts, if it is: the residual
 /// it is credited with is mostly coherent with the reference (deterministic: no predicted
 /// spread holds it), and its noise-free run removes too little of that coherent part; or
-/// its noise-free run leaves more coherent error than the current model's whole residual
-/// ([`MAX_COHERENT_LEFT`]), whatever that residual's share. Chatter and impacts, whose
+/// its noise-free run leaves more than [`MAX_COHERENT_LEFT`] times the current model's
+/// whole residual as coherent error, whatever that residual's share. Chatter and impacts, whose
 /// phase is their own, are not coherent (3 % on a true stick-slip, 12 % on a true free
 /// play), and the score may credit their spread.
 pub(super) fn spread_credited(split: &CoherentSplit) -> Option<String> {

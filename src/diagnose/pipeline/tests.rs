@@ -76,7 +76,8 @@ fn the_verdict_needs_gain_physics_and_evidence() {
 
 /// A mostly coherent residual (deterministic) must lose a tenth of its coherent power to
 /// the cause; a mostly incoherent one (chatter, impacts) may be credited to spread unless
-/// the cause leaves more coherent error than the whole residual it is credited with.
+/// the cause leaves more than ten times the whole residual it is credited with as
+/// coherent error.
 #[test]
 fn a_deterministic_residual_is_not_credited_to_spread() {
     let split = |coherent: f64, total: f64, after: f64| CoherentSplit {
