@@ -28,27 +28,55 @@ fn parameters_text(
 
 /// The causes, partial explanations and unexplained cells as HTML and Markdown sections.
 pub(super) fn write_causes(html: &mut String, md: &mut String, d: &Diagnosis) {
+    write_cause_table(html, md, d);
+    write_notes(html, md, d);
+    if d.unexplained.is_empty() {
+        return;
+    }
+    for f in &d.sensor_findings {
+        paragraph(html, md, &format!("Sensor: {}.", f.describe()), true);
+    }
+    write_unexplained(html, md, d);
+}
+
+/// `line` as a paragraph of both documents, in bold when `bold`.
+fn paragraph(html: &mut String, md: &mut String, line: &str, bold: bool) {
+    if bold {
+        let _ = write!(html, "<p><b>{}</b></p>", escape_html(line));
+        let _ = writeln!(md, "\n**{line}**");
+    } else {
+        let _ = write!(html, "<p>{}</p>", escape_html(line));
+        let _ = writeln!(md, "\n{line}");
+    }
+}
+
+/// The accepted causes with their parameters and gains, `None.` without any.
+fn write_cause_table(html: &mut String, md: &mut String, d: &Diagnosis) {
     html.push_str("<h2>Causes, in order of acceptance</h2>");
     md.push_str("\n## Causes, in order of acceptance\n\n");
     if d.causes.is_empty() {
         html.push_str("<p>None.</p>");
         md.push_str("None.\n");
-    } else {
-        html.push_str("<table><tr><th>effect</th><th>parameters (1 sigma)</th><th>gain</th></tr>");
-        md.push_str("| effect | parameters (1 sigma) | gain |\n|---|---|---|\n");
-        for c in &d.causes {
-            let ps = parameters_text(&c.parameters, &c.sigma);
-            let _ = write!(
-                html,
-                "<tr><td>{}</td><td style=\"text-align:left\">{}</td><td>{:.2}</td></tr>",
-                c.effect.name(),
-                escape_html(&ps),
-                c.gain
-            );
-            let _ = writeln!(md, "| {} | {ps} | {:.2} |", c.effect.name(), c.gain);
-        }
-        html.push_str("</table>");
+        return;
     }
+    html.push_str("<table><tr><th>effect</th><th>parameters (1 sigma)</th><th>gain</th></tr>");
+    md.push_str("| effect | parameters (1 sigma) | gain |\n|---|---|---|\n");
+    for c in &d.causes {
+        let ps = parameters_text(&c.parameters, &c.sigma);
+        let _ = write!(
+            html,
+            "<tr><td>{}</td><td style=\"text-align:left\">{}</td><td>{:.2}</td></tr>",
+            c.effect.name(),
+            escape_html(&ps),
+            c.gain
+        );
+        let _ = writeln!(md, "| {} | {ps} | {:.2} |", c.effect.name(), c.gain);
+    }
+    html.push_str("</table>");
+}
+
+/// What could not be tested or scored, the partial explanations and the sensors' finding.
+fn write_notes(html: &mut String, md: &mut String, d: &Diagnosis) {
     let notes = d
         .baseline_unscorable
         .iter()
@@ -56,8 +84,7 @@ pub(super) fn write_causes(html: &mut String, md: &mut String, d: &Diagnosis) {
         .chain(d.mass_scale_text())
         .chain(d.visibility_text());
     for why in d.not_testable.iter().cloned().chain(notes) {
-        let _ = write!(html, "<p>{}.</p>", escape_html(&why));
-        let _ = writeln!(md, "\n{why}.");
+        paragraph(html, md, &format!("{why}."), false);
     }
     for p in &d.partial {
         let line = format!(
@@ -66,22 +93,15 @@ pub(super) fn write_causes(html: &mut String, md: &mut String, d: &Diagnosis) {
             p.selection_gain,
             p.why_not_a_cause
         );
-        let _ = write!(html, "<p>{}</p>", escape_html(&line));
-        let _ = writeln!(md, "\n{line}");
+        paragraph(html, md, &line, false);
     }
     if let Some(f) = d.kinematics.as_ref().and_then(|k| k.finding.as_ref()) {
-        let line = format!("Sensors: {f}.");
-        let _ = write!(html, "<p><b>{}</b></p>", escape_html(&line));
-        let _ = writeln!(md, "\n**{line}**");
+        paragraph(html, md, &format!("Sensors: {f}."), true);
     }
-    if d.unexplained.is_empty() {
-        return;
-    }
-    for f in &d.sensor_findings {
-        let line = format!("Sensor: {}.", f.describe());
-        let _ = write!(html, "<p><b>{}</b></p>", escape_html(&line));
-        let _ = writeln!(md, "\n**{line}**");
-    }
+}
+
+/// Where the residual left lies, one row per unexplained cell, worst first.
+fn write_unexplained(html: &mut String, md: &mut String, d: &Diagnosis) {
     html.push_str(
         "<h2>What is left unexplained (report quarter, worst first)</h2>\
          <p>Residual in noise units; the band holds the cell's largest residual; the splits give \
