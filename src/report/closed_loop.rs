@@ -34,6 +34,15 @@ pub fn text(cl: &ClosedLoopFit) -> String {
             cl.validation_tests.join(", ")
         }
     );
+    write_estimates(&mut t, cl);
+    write_fits(&mut t, cl);
+    write_caveats(&mut t, cl);
+    t
+}
+
+/// What was fitted, the identifiable combinations, what the data cannot separate, the
+/// valve's order and what was held, one line each.
+fn write_estimates(t: &mut String, cl: &ClosedLoopFit) {
     for e in &cl.estimates {
         let bound = if e.at_bound {
             " AT A BOUND of its range: not an estimate"
@@ -77,6 +86,11 @@ pub fn text(cl: &ClosedLoopFit) -> String {
             c.key, c.value, c.reason
         );
     }
+}
+
+/// Measured against simulated per test and channel, predictions marked, and how many of
+/// those fits the sensors' noise limits.
+fn write_fits(t: &mut String, cl: &ClosedLoopFit) {
     for f in &cl.fits {
         let role = match f.role {
             Role::Estimation => "fitted on",
@@ -99,6 +113,10 @@ pub fn text(cl: &ClosedLoopFit) -> String {
             "  {limited} of these fits are noise-limited (the noise at rest is more than half the channel's RMS): their fit % tells of the sensors, not of the model"
         );
     }
+}
+
+/// The runs that stopped, the warning when none ran through, and the sigmas' widening.
+fn write_caveats(t: &mut String, cl: &ClosedLoopFit) {
     for s in &cl.stopped {
         let _ = writeln!(t, "  stopped: {s}");
     }
@@ -115,7 +133,6 @@ pub fn text(cl: &ClosedLoopFit) -> String {
         "  (sigmas widened {:.1} times in variance for the residuals' correlation)",
         cl.correlation_factor
     );
-    t
 }
 
 /// The report's sections: the fit's text, then measured against simulated: the first
