@@ -40,20 +40,7 @@ struct Figures {
 }
 
 pub fn run(args: Args) -> anyhow::Result<()> {
-    if !(args.f_min > 0.0 && args.f_max > args.f_min && args.f_max.is_finite()) {
-        anyhow::bail!(
-            "--f-min and --f-max must satisfy 0 < f-min < f-max (got {} and {})",
-            args.f_min,
-            args.f_max
-        );
-    }
-    crate::limits::within(
-        "--points",
-        args.points,
-        10,
-        crate::limits::MAX_FRF_POINTS,
-        "MAX_FRF_POINTS",
-    )?;
+    check_range(&args)?;
     let mut inputs = Inputs::new();
     if let Some(p) = &args.params {
         inputs.add(p);
@@ -74,6 +61,49 @@ pub fn run(args: Args) -> anyhow::Result<()> {
     let poles = lin.upper_poles().context(
         "the closed-loop poles could not be computed (the eigenvalue iteration did not converge)",
     )?;
+    let figures = Figures {
+        table_tf: fig,
+        oil_column: oil,
+        poles,
+        notes: lin.notes.clone(),
+    };
+    print_figures(&args, &p, &figures);
+    let Some(plan) = plan else { return Ok(()) };
+    let staging = plan.stage()?;
+    write_files(staging.path(), &args, &lin, &figures)
+        .with_context(|| format!("writing {}", plan.target().display()))?;
+    staging.commit()?;
+    let dir = plan.target();
+    println!(
+        "wrote {}, {}, {}",
+        dir.join("frf.csv").display(),
+        dir.join("bode.png").display(),
+        dir.join("figures.json").display()
+    );
+    Ok(())
+}
+
+/// The frequency range and point count asked for, checked before anything is read.
+fn check_range(args: &Args) -> anyhow::Result<()> {
+    if !(args.f_min > 0.0 && args.f_max > args.f_min && args.f_max.is_finite()) {
+        anyhow::bail!(
+            "--f-min and --f-max must satisfy 0 < f-min < f-max (got {} and {})",
+            args.f_min,
+            args.f_max
+        );
+    }
+    crate::limits::within(
+        "--points",
+        args.points,
+        10,
+        crate::limits::MAX_FRF_POINTS,
+        "MAX_FRF_POINTS",
+    )
+}
+
+/// The figures on standard output, one a line.
+fn print_figures(args: &Args, p: &shaketable::Params, f: &Figures) {
+    let (fig, oil) = (&f.table_tf, &f.oil_column);
     let source = args
         .params
         .as_ref()
@@ -103,7 +133,7 @@ pub fn run(args: Args) -> anyhow::Result<()> {
         oil.frequency_hz, oil.damping_ratio, oil.stiffness_n_m
     );
     println!("closed-loop poles (frequency, damping ratio):");
-    for q in &poles {
+    for q in &f.poles {
         if q.frequency_hz < 1e-6 {
             println!(
                 "  {:10.3} Hz  (zero pole: the linearised Bouc-Wen state duplicates the stroke)",
@@ -113,28 +143,9 @@ pub fn run(args: Args) -> anyhow::Result<()> {
             println!("  {:10.3} Hz  {:.4}", q.frequency_hz, q.damping_ratio);
         }
     }
-    for n in &lin.notes {
+    for n in &f.notes {
         println!("note: {n}");
     }
-    let Some(plan) = plan else { return Ok(()) };
-    let figures = Figures {
-        table_tf: fig,
-        oil_column: oil,
-        poles,
-        notes: lin.notes.clone(),
-    };
-    let staging = plan.stage()?;
-    write_files(staging.path(), &args, &lin, &figures)
-        .with_context(|| format!("writing {}", plan.target().display()))?;
-    staging.commit()?;
-    let dir = plan.target();
-    println!(
-        "wrote {}, {}, {}",
-        dir.join("frf.csv").display(),
-        dir.join("bode.png").display(),
-        dir.join("figures.json").display()
-    );
-    Ok(())
 }
 
 /// frf.csv, bode.png and figures.json into `out` (a fresh folder).
