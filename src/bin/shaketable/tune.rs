@@ -3,7 +3,7 @@
 
 use crate::limits::within;
 use shaketable::linear::{log_grid, Linearisation};
-use shaketable::motion::tune::{tune, MIN_POLE_DAMPING, TUNE_POINTS};
+use shaketable::motion::tune::{tune, Tuning, MIN_POLE_DAMPING, TUNE_POINTS};
 use shaketable::output::{self, Inputs};
 use shaketable::report::plot::{bode_png, BodeCurve};
 use std::fmt::Write;
@@ -52,6 +52,22 @@ pub fn run(a: Args) -> anyhow::Result<()> {
     };
     let band = (a.band_min_hz, a.band_max_hz);
     let t = tune(&params, band).map_err(|m| anyhow::anyhow!("tune: {m}"))?;
+    print_tuning(&t, band);
+    let mut tuned = params;
+    tuned.controller = t.after;
+    output::write_file(&a.out, tuned.to_toml_string().as_bytes(), a.force, &inputs)?;
+    println!("wrote {}", a.out.display());
+    if let Some(plan) = frf_plan {
+        let stage = plan.stage()?;
+        write_frf(stage.path(), &params, &tuned)?;
+        stage.commit()?;
+        println!("wrote {}/ (frf.csv, bode.png)", plan.target().display());
+    }
+    Ok(())
+}
+
+/// The objective, the margin, the gains before and after and what they achieve.
+fn print_tuning(t: &Tuning, band: (f64, f64)) {
     println!(
         "objective: RMS over {TUNE_POINTS} log-spaced frequencies from {} to {} Hz of the table \
          gain in dB (reference to table acceleration, linearised, specimen included)",
@@ -78,51 +94,50 @@ pub fn run(a: Args) -> anyhow::Result<()> {
         "flatness {:.2} dB RMS -> {:.2} dB RMS; least pole damping {:.4} -> {:.4}",
         t.flatness_db_before, t.flatness_db_after, t.min_damping_before, t.min_damping_after
     );
-    let mut tuned = params;
-    tuned.controller = t.after;
-    output::write_file(&a.out, tuned.to_toml_string().as_bytes(), a.force, &inputs)?;
-    println!("wrote {}", a.out.display());
-    if let Some(plan) = frf_plan {
-        let grid = log_grid(0.1, 100.0, 400);
-        let before = Linearisation::new(&params).sample(&grid, Linearisation::table_tf);
-        let after = Linearisation::new(&tuned).sample(&grid, Linearisation::table_tf);
-        let mut csv =
-            String::from("frequency_hz,gain_before,phase_before_deg,gain_after,phase_after_deg\n");
-        for (k, f) in grid.iter().enumerate() {
-            let (x, y) = (before.response[k], after.response[k]);
-            let _ = writeln!(
-                csv,
-                "{f},{},{},{},{}",
-                x.norm(),
-                x.arg().to_degrees(),
-                y.norm(),
-                y.arg().to_degrees()
-            );
-        }
-        let stage = plan.stage()?;
-        std::fs::write(stage.path().join("frf.csv"), csv)?;
-        let curves = [
-            BodeCurve {
-                label: "before",
-                frequency_hz: &grid,
-                response: &before.response,
-            },
-            BodeCurve {
-                label: "after (tuned)",
-                frequency_hz: &grid,
-                response: &after.response,
-            },
-        ];
-        bode_png(
-            &stage.path().join("bode.png"),
-            "table transfer, reference to table acceleration",
-            "gain",
-            &curves,
-            0.1,
-            100.0,
-        )?;
-        stage.commit()?;
-        println!("wrote {}/ (frf.csv, bode.png)", plan.target().display());
+}
+
+/// frf.csv and bode.png of the table transfer before and after tuning into `dir`.
+fn write_frf(
+    dir: &std::path::Path,
+    params: &shaketable::Params,
+    tuned: &shaketable::Params,
+) -> anyhow::Result<()> {
+    let grid = log_grid(0.1, 100.0, 400);
+    let before = Linearisation::new(params).sample(&grid, Linearisation::table_tf);
+    let after = Linearisation::new(tuned).sample(&grid, Linearisation::table_tf);
+    let mut csv =
+        String::from("frequency_hz,gain_before,phase_before_deg,gain_after,phase_after_deg\n");
+    for (k, f) in grid.iter().enumerate() {
+        let (x, y) = (before.response[k], after.response[k]);
+        let _ = writeln!(
+            csv,
+            "{f},{},{},{},{}",
+            x.norm(),
+            x.arg().to_degrees(),
+            y.norm(),
+            y.arg().to_degrees()
+        );
     }
+    std::fs::write(dir.join("frf.csv"), csv)?;
+    let curves = [
+        BodeCurve {
+            label: "before",
+            frequency_hz: &grid,
+            response: &before.response,
+        },
+        BodeCurve {
+            label: "after (tuned)",
+            frequency_hz: &grid,
+            response: &after.response,
+        },
+    ];
+    bode_png(
+        &dir.join("bode.png"),
+        "table transfer, reference to table acceleration",
+        "gain",
+        &curves,
+        0.1,
+        100.0,
+    )?;
     Ok(())
 }
