@@ -29,8 +29,9 @@ pub(in crate::diagnose) const MIN_COHERENT_REMOVED: f64 = 0.1;
 /// residual power as coherent (deterministic) error on the cells it is credited with:
 /// far more would be an error it adds, which only its predicted spread can hide (a
 /// deadband "explaining" a sign-flipped valve command left 95 times it). Ten, an order of
-/// magnitude: true causes seen leave 0.00005 (a foundation) to 1.03 (seed 703's 1.5-mm
-/// free play, whose impacts at the reversals fall where the measured ones do not).
+/// magnitude: true causes seen leave 0.00005 (a foundation) to 1.34 (a 0.87-mm free play,
+/// seed 7232; seed 703's 1.5-mm play 1.03), whose impacts at the reversals fall where the
+/// measured ones do not.
 pub(in crate::diagnose) const MAX_COHERENT_LEFT: f64 = 10.0;
 
 /// The candidate a search polishes and judges: the best-scoring one that is physical and
