@@ -49,12 +49,29 @@ fn table_6t() -> Params {
     p
 }
 
+/// How far an identified oil column may be from the truth, relative.
+struct Tolerance {
+    frequency: f64,
+    damping: f64,
+}
+
+/// The tolerances at three times the noise ([`FREQUENCY_TOLERANCE`], [`DAMPING_TOLERANCE`]).
+const AT_THREE_TIMES_THE_NOISE: Tolerance = Tolerance {
+    frequency: FREQUENCY_TOLERANCE,
+    damping: DAMPING_TOLERANCE,
+};
+
 /// Synthesise the program's random tests, triangles and sines of `truth` at `seed` and
 /// three times the noise, identify, and check the oil column against the truth.
 fn check_oil_column(truth: &Params, seed: u64, what: &str) {
+    check_oil_column_at(truth, seed, NOISE_SCALE, &AT_THREE_TIMES_THE_NOISE, what)
+}
+
+/// [`check_oil_column`] at `noise_scale` times the default noise, within `tol`.
+fn check_oil_column_at(truth: &Params, seed: u64, noise_scale: f64, tol: &Tolerance, what: &str) {
     let opts = SynthOptions {
         seed,
-        noise: noisy(NOISE_SCALE),
+        noise: noisy(noise_scale),
         ..SynthOptions::default()
     };
     let id = identify_screened(&screen(&synthesise(truth, &opts, None)));
@@ -67,14 +84,14 @@ fn check_oil_column(truth: &Params, seed: u64, what: &str) {
     let f_err = oil.frequency_hz / true_oil.frequency_hz - 1.0;
     let zeta_err = oil.damping_ratio / true_oil.damping_ratio - 1.0;
     assert!(
-        f_err.abs() < FREQUENCY_TOLERANCE,
+        f_err.abs() < tol.frequency,
         "{what}: oil-column frequency {:.4} Hz vs {:.4} Hz ({:+.2} %)",
         oil.frequency_hz,
         true_oil.frequency_hz,
         100.0 * f_err
     );
     assert!(
-        zeta_err.abs() < DAMPING_TOLERANCE,
+        zeta_err.abs() < tol.damping,
         "{what}: oil-column damping {:.5} vs {:.5} ({:+.1} %)",
         oil.damping_ratio,
         true_oil.damping_ratio,
@@ -92,4 +109,30 @@ fn oil_column_of_the_41_t_table_at_three_times_the_noise() {
 #[test]
 fn oil_column_of_a_6_t_table_at_three_times_the_noise() {
     check_oil_column(&table_6t(), 2, "6 t, seed 2");
+}
+
+/// Tables whose oil column is far from the TREES Lab's 14 Hz, at the default noise: 6 t
+/// and 15 t on the TREES Lab actuator (37.2 and 23.5 Hz), and 6 t on an actuator twice as
+/// stiff (53.8 Hz, above the fit's 40-Hz band). The fit from the paper's 14-Hz start alone
+/// stopped in a local minimum near 14-15 Hz on all three (-60, -35 and -72 %).
+/// Tolerances: about twice the largest error of a sweep (frequency -0.24 to +2.35 %,
+/// damping +0.4 to +11.7 %; the 3-t table's 52.5-Hz column gave both largest errors): the
+/// 6-t table at seeds 1-4 and 471 at one and seeds 1-4 at three times the noise, the 3-t,
+/// 15-t and 80-t tables and the stiff actuator at seed 5.
+#[test]
+fn oil_column_of_tables_far_from_14_hz() {
+    const FAR: Tolerance = Tolerance {
+        frequency: 0.05,
+        damping: 0.25,
+    };
+    let light = |mass_kg: f64, bulk_modulus_pa: f64| {
+        let mut p = Params::trees_lab();
+        p.table.mass_kg = mass_kg;
+        p.actuator.bulk_modulus_pa = bulk_modulus_pa;
+        p
+    };
+    let beta = Params::trees_lab().actuator.bulk_modulus_pa;
+    check_oil_column_at(&light(6000.0, beta), 471, 1.0, &FAR, "6 t, 37 Hz");
+    check_oil_column_at(&light(15_000.0, beta), 5, 1.0, &FAR, "15 t, 23.5 Hz");
+    check_oil_column_at(&light(6000.0, 2.5e9), 5, 1.0, &FAR, "6 t, 53.8 Hz");
 }

@@ -114,24 +114,44 @@ const START_FREQUENCY_HZ: f64 = 14.0;
 /// Start of the oil-column damping ratio (paper 4.1.3: 0.0336).
 const START_DAMPING_RATIO: f64 = 0.03;
 
+/// Further starts of the oil-column frequency, Hz, spanning the fit's stiffness bounds
+/// (3.1 to 63 Hz about the 14-Hz start): a table lighter or an actuator stiffer than the
+/// TREES Lab's puts its oil column far from 14 Hz, and the equation error has a local
+/// minimum near the start (a 6-t table on the TREES Lab actuator, its column at 37 Hz,
+/// was fitted at 14.5 Hz with a damping ratio of 0.0006 from the 14-Hz start alone).
+const OTHER_START_FREQUENCIES_HZ: [f64; 6] = [5.0, 9.0, 21.0, 30.0, 42.0, 56.0];
+
+/// A further start replaces the paper's start's fit only when its cost is below this
+/// share of it: a distinct, better minimum, not the same one reached to rounding (the
+/// paper's start's result then stands bit for bit).
+const BETTER_MINIMUM_SHARE: f64 = 0.99;
+
 /// The oil column's stiffness, leakage and flow-gain scale fitted to `spectra` over
 /// [`OIL_BAND_HZ`] by the equation error ([`CrossSpectra::equation_error`]) of
-/// `valve(s) F/x_v(s)` (`valve` is 1 when the spectra's input is the spool).
+/// `valve(s) F/x_v(s)` (`valve` is 1 when the spectra's input is the spool): from the
+/// paper's 14-Hz start, and, with `other_starts`, from [`OTHER_START_FREQUENCIES_HZ`] where
+/// one of those finds a clearly lower minimum ([`BETTER_MINIMUM_SHARE`]).
 fn fit_stiffness_and_leakage(
     spectra: &CrossSpectra,
     table: &TableStiffness,
     geometry: &OilGeometry,
     valve: &(dyn Fn(Complex64) -> Complex64 + Sync),
+    other_starts: bool,
 ) -> Option<lsq::LsqFit> {
     let idx = spectra.band(OIL_BAND_HZ[0], OIL_BAND_HZ[1]);
     let area = geometry.piston_area_m2;
     let kq_a = geometry.flow_gain_m3_s * area;
-    // start: a 14-Hz oil column (the TREES Lab table's) with its damping, the leakage
-    // from `zeta = C_l sqrt(k_oil M) / (2 A^2)` (spec section 4) so that it scales with
-    // the table; the leakage bounded by the physical damping bounds
-    let k0 = table.mass_kg * (2.0 * PI * START_FREQUENCY_HZ).powi(2);
-    let leakage_of = |zeta: f64| 2.0 * zeta * area * area / (k0 * table.mass_kg).sqrt();
-    let l0 = leakage_of(START_DAMPING_RATIO);
+    // the leakage of a damping ratio `zeta` at stiffness `k`, from
+    // `zeta = C_l sqrt(k_oil M) / (2 A^2)` (spec section 4), so that it scales with the table
+    let leakage_of = |zeta: f64, k: f64| 2.0 * zeta * area * area / (k * table.mass_kg).sqrt();
+    let stiffness_of = |f_hz: f64| table.mass_kg * (2.0 * PI * f_hz).powi(2);
+    // the box and scales about the paper's start (a 14-Hz oil column with its damping);
+    // the leakage bounded by the physical damping bounds
+    let k0 = stiffness_of(START_FREQUENCY_HZ);
+    let l0 = leakage_of(START_DAMPING_RATIO, k0);
+    let lower = [k0 * 0.05, 0.0, 0.1];
+    let upper = [k0 * 20.0, leakage_of(DAMPING_BOUNDS[1], k0), 10.0];
+    let scale = [k0, l0, 1.0];
     let resid = |p: &[f64]| -> Option<Vec<f64>> {
         let mut r = Vec::with_capacity(2 * idx.len());
         for &i in &idx {
@@ -144,16 +164,27 @@ fn fit_stiffness_and_leakage(
         }
         Some(r)
     };
-    let (t0, scale) = ([k0, l0, 1.0], [k0, l0, 1.0]);
-    minimise(
-        resid,
-        &t0,
-        &[k0 * 0.05, 0.0, 0.1],
-        &[k0 * 20.0, leakage_of(DAMPING_BOUNDS[1]), 10.0],
-        &scale,
-        LsqOptions::default(),
-    )
-    .filter(|f| f.moved_from(&t0, &scale))
+    let fit_from = |f_hz: f64| {
+        let k = stiffness_of(f_hz);
+        let t0 = [k, leakage_of(START_DAMPING_RATIO, k), 1.0];
+        minimise(resid, &t0, &lower, &upper, &scale, LsqOptions::default())
+            .filter(|f| f.moved_from(&t0, &scale))
+    };
+    let paper = fit_from(START_FREQUENCY_HZ);
+    let others: &[f64] = if other_starts {
+        &OTHER_START_FREQUENCIES_HZ
+    } else {
+        &[]
+    };
+    let best_other = others
+        .iter()
+        .filter_map(|&f| fit_from(f))
+        .min_by(|a, b| a.cost.total_cmp(&b.cost));
+    match (paper, best_other) {
+        (Some(p), Some(o)) if o.cost < BETTER_MINIMUM_SHARE * p.cost => Some(o),
+        (Some(p), _) => Some(p),
+        (None, o) => o,
+    }
 }
 
 /// Oil column from R3 (4.1.3) for `k_oil`, `C_l` and a flow-gain scale, on a table of
@@ -195,6 +226,7 @@ pub fn fit_oil_column(
                 &table,
                 geometry,
                 &|s| v.response(s),
+                true,
             ),
         ),
         None => (
@@ -204,6 +236,7 @@ pub fn fit_oil_column(
                 &table,
                 geometry,
                 &|_| Complex64::new(1.0, 0.0),
+                true,
             ),
         ),
     };
@@ -213,11 +246,13 @@ pub fn fit_oil_column(
             "oil-column fit failed or did not move from its start values",
         )
     })?;
-    // H1 from the noisy spool, for the report's comparison
+    // H1 from the noisy spool, for the report's comparison with the paper's estimate: from
+    // the paper's start alone (its noise bias has lower minima far from any oil column)
     let h1fit = CrossSpectra::new(&w, ch.spool, ch.spool, ch.force)
         .ok()
         .and_then(|h1| {
-            fit_stiffness_and_leakage(&h1, &table, geometry, &|_| Complex64::new(1.0, 0.0))
+            let unit = |_| Complex64::new(1.0, 0.0);
+            fit_stiffness_and_leakage(&h1, &table, geometry, &unit, false)
         });
     let fitted = FittedColumn {
         name,
