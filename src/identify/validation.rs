@@ -1,7 +1,7 @@
 //! Validation of the identified model on the table transfer function (paper section 5).
 
 use super::error::IdentifyError;
-use super::frf::{FrfError, FrfEstimate};
+use super::frf::FrfEstimate;
 use super::results::{FrfData, Validation};
 use super::servovalve::relative_error;
 use super::signals::welch_for;
@@ -81,16 +81,45 @@ pub fn validate(c: &Campaign, name: &str, params: &Params) -> Result<Validation,
 }
 
 /// The table acceleration of the nonlinear model's run. A run that stopped has no table
-/// TF: the validation is not usable, with the error the Welch estimate gives at the first
-/// sample without a reading (the same text as when the stop was read as NaN samples).
+/// TF: the validation is not usable, and the error says that the identified model's run
+/// stopped, where and why (not a non-finite sample, which a reader takes for the file's).
 fn simulated_acceleration(sim: Simulated) -> Result<Vec<f64>, IdentifyError> {
     match sim {
         Ok(out) => Ok(out.iter().map(|o| o.acceleration_m_s2).collect()),
-        Err(stop) => {
-            let before = stop.outputs.iter().map(|o| o.acceleration_m_s2);
-            let first = before.clone().position(|a| !a.is_finite());
-            let sample = first.unwrap_or(stop.sample());
-            Err(IdentifyError::not_usable(FrfError::NonFinite(sample)))
-        }
+        Err(stop) => Err(IdentifyError::not_usable(format!(
+            "the identified model's run with the nonlinear actuator: {stop}; no simulated \
+             table transfer function"
+        ))),
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::campaign::synth::{synthesise, SynthOptions};
+
+    /// A model whose run leaves the envelope (a flow gain 50 times the table's: the loop
+    /// gain with it)
+    /// makes the validation unusable with an error that says the model's run stopped,
+    /// where and why, not a non-finite sample of the file.
+    #[test]
+    fn a_model_whose_run_stops_is_named_as_such() {
+        let truth = Params::trees_lab();
+        let opts = SynthOptions {
+            random_duration_s: 8.0,
+            tests: Some(vec!["R2".into()]),
+            ..SynthOptions::default()
+        };
+        let c = synthesise(&truth, &opts, None);
+        assert!(validate(&c, "R2", &truth).is_ok());
+        let mut unstable = truth;
+        unstable.actuator.flow_gain_m3_s *= 50.0;
+        let text = validate(&c, "R2", &unstable).unwrap_err().to_string();
+        assert!(
+            text.contains("the identified model's run with the nonlinear actuator")
+                && text.contains("stopped at sample")
+                && !text.contains("non-finite sample"),
+            "{text}"
+        );
     }
 }
