@@ -469,6 +469,18 @@ fn finds_effects_on_other_baselines() {
     check(&nonlinear, "valve_deadband", "deadband", 0.25, 603);
 }
 
+/// A table whose oil column lies far from the TREES Lab's 14 Hz: 15 t on the TREES Lab
+/// actuator, its column at 23.5 Hz (seed 604: a 37-t specimen at 6.14 Hz). Until stop 51
+/// section 4 fitted such a column from the paper's 14-Hz start alone and stopped near
+/// 15 Hz; the output-error refinement recovered from that on this table (a 5-t specimen
+/// at 8 Hz, seed 474, was found either way), on a 6-t one it did not.
+#[test]
+fn finds_a_specimen_on_a_lighter_table() {
+    let mut light = Params::trees_lab();
+    light.table.mass_kg = 15_000.0;
+    check(&light, "specimen", "frequency_hz", 0.05, 604);
+}
+
 /// The foundation on the nonlinear-actuator baseline (see [`finds_a_foundation`]).
 #[test]
 fn finds_a_foundation_on_the_nonlinear_actuator() {
