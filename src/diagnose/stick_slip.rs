@@ -68,10 +68,9 @@ fn point_of(f: &ScoreFit, friction_n: f64) -> StickSlipPoint {
 /// amplitude, so the fit starts from the friction-velocity curve read off the slow tests
 /// ([`stribeck`]; a grid when they never slide slowly), polishes `(r_s, v_s, F_mu)` by
 /// Nelder-Mead, then, when that clearly beats the baseline without stick-slip
-/// ([`UNBEND_BELOW_BARE_SHARE`]), unbends the
-/// baseline by output error with that stick-slip in place (the refinement had raised the
-/// friction and shrunk its yield displacement to absorb the static peaks) and polishes
-/// again while the score improves.
+/// ([`UNBEND_BELOW_BARE_SHARE`]), unbends the baseline by output error with that
+/// stick-slip in place (the refinement had raised the friction and shrunk its yield
+/// displacement to absorb the static peaks) and polishes again while the score improves.
 pub(super) fn fit_stick_slip(base: &Params, sig: &[usize], ctx: &FitContext) -> Option<ScoreFit> {
     let c = ctx.c;
     let score_on = |base: Params| StickSlipScore {

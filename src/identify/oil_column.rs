@@ -130,7 +130,8 @@ const BETTER_MINIMUM_SHARE: f64 = 0.99;
 /// [`OIL_BAND_HZ`] by the equation error ([`CrossSpectra::equation_error`]) of
 /// `valve(s) F/x_v(s)` (`valve` is 1 when the spectra's input is the spool): from the
 /// paper's 14-Hz start, and, with `other_starts`, from [`OTHER_START_FREQUENCIES_HZ`] where
-/// one of those finds a clearly lower minimum ([`BETTER_MINIMUM_SHARE`]).
+/// one of those finds a clearly lower minimum ([`BETTER_MINIMUM_SHARE`]) or the paper's
+/// start fails.
 fn fit_stiffness_and_leakage(
     spectra: &CrossSpectra,
     table: &TableStiffness,

@@ -98,10 +98,9 @@ mod tests {
     use super::*;
     use crate::campaign::synth::{synthesise, SynthOptions};
 
-    /// A model whose run leaves the envelope (a flow gain 50 times the table's: the loop
-    /// gain with it)
-    /// makes the validation unusable with an error that says the model's run stopped,
-    /// where and why, not a non-finite sample of the file.
+    /// A model whose run leaves the envelope (a flow gain, and with it the loop gain, 50
+    /// times the table's) makes the validation unusable with an error that says the
+    /// model's run stopped, where and why, not a non-finite sample of the file.
     #[test]
     fn a_model_whose_run_stops_is_named_as_such() {
         let truth = Params::trees_lab();
