@@ -273,19 +273,22 @@ fn cli_exit_codes() {
     assert!(err.contains("S3.csv"), "{err}");
 }
 
-/// A corruption that stops the refined baseline's run in a report quarter (R1's spool
-/// channel a thousandfold: found by the property test above in CI) leaves no gain to
-/// measure, so no cause is named, and the diagnosis says why, naming the stopped run.
+/// A corruption that leaves the refined baseline unscorable on a report quarter (R1's
+/// spool channel ten-thousandfold) leaves no gain to measure, so no cause is named, and
+/// the diagnosis says why. Found by the property test above in CI with a thousandfold
+/// spool, whose baseline's run stopped in R1's report quarter; since stop 51 the oil
+/// column's further starts give that campaign a baseline that runs through (held-out
+/// residual 3875, no cause, `explained: false`), and ten-thousandfold reaches this path.
 #[test]
-fn a_baseline_stopped_in_the_report_quarter_names_no_cause() {
+fn a_baseline_unscorable_in_the_report_quarter_names_no_cause() {
     let mut c = base().clone();
-    apply(&mut c, &Mutation::Scale(0, 6, 3));
+    apply(&mut c, &Mutation::Scale(0, 6, 4));
     let d = shaketable::diagnose::diagnose(&c, shaketable::diagnose::Effort::Full, None).unwrap();
     assert!(!d.baseline_heldout.is_finite(), "{}", d.baseline_heldout);
     assert!(d.cause().is_none() && d.causes.is_empty());
     let why = d.baseline_unscorable.as_deref().unwrap_or_default();
     assert!(
-        why.contains("report quarter") && why.contains("stopped"),
+        why.contains("report quarter") && (why.contains("stopped") || why.contains("not finite")),
         "{why}"
     );
 }
