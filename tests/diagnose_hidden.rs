@@ -474,9 +474,9 @@ fn finds_effects_on_other_baselines() {
 /// section 4 fitted such a column from the paper's 14-Hz start alone and stopped near
 /// 15 Hz; the output-error refinement recovered from that on this table (a 5-t specimen
 /// at 8 Hz, seed 474, was found either way), on a 6-t one it did not. Seeds 605-607 still
-/// fail, before stop 51's change and after it alike: specimens of 26-34 t, twice the
-/// table's mass, stiffen section 4's oil column (README, "Identification"), and the
-/// refined baseline diverges (605) or a foundation is named, `explained: false` (606, 607).
+/// fail: specimens of 26-34 t, about twice the table's mass, stiffen section 4's oil column
+/// (README, "Identification"), and the refined baseline diverges (605) or a foundation is
+/// named, `explained: false` (606, 607; 606 gave the same foundation before stop 51).
 #[test]
 fn finds_a_specimen_on_a_lighter_table() {
     let mut light = Params::trees_lab();
