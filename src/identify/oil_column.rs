@@ -129,15 +129,14 @@ const BETTER_MINIMUM_SHARE: f64 = 0.99;
 /// The oil column's stiffness, leakage and flow-gain scale fitted to `spectra` over
 /// [`OIL_BAND_HZ`] by the equation error ([`CrossSpectra::equation_error`]) of
 /// `valve(s) F/x_v(s)` (`valve` is 1 when the spectra's input is the spool): from the
-/// paper's 14-Hz start, and, with `other_starts`, from [`OTHER_START_FREQUENCIES_HZ`] where
-/// one of those finds a clearly lower minimum ([`BETTER_MINIMUM_SHARE`]) or the paper's
-/// start fails.
+/// paper's 14-Hz start, and from the frequencies `other_starts_hz` where one of those finds
+/// a clearly lower minimum ([`BETTER_MINIMUM_SHARE`]) or the paper's start fails.
 fn fit_stiffness_and_leakage(
     spectra: &CrossSpectra,
     table: &TableStiffness,
     geometry: &OilGeometry,
     valve: &(dyn Fn(Complex64) -> Complex64 + Sync),
-    other_starts: bool,
+    other_starts_hz: &[f64],
 ) -> Option<lsq::LsqFit> {
     let idx = spectra.band(OIL_BAND_HZ[0], OIL_BAND_HZ[1]);
     let area = geometry.piston_area_m2;
@@ -172,12 +171,7 @@ fn fit_stiffness_and_leakage(
             .filter(|f| f.moved_from(&t0, &scale))
     };
     let paper = fit_from(START_FREQUENCY_HZ);
-    let others: &[f64] = if other_starts {
-        &OTHER_START_FREQUENCIES_HZ
-    } else {
-        &[]
-    };
-    let best_other = others
+    let best_other = other_starts_hz
         .iter()
         .filter_map(|&f| fit_from(f))
         .min_by(|a, b| a.cost.total_cmp(&b.cost));
@@ -227,7 +221,7 @@ pub fn fit_oil_column(
                 &table,
                 geometry,
                 &|s| v.response(s),
-                true,
+                &OTHER_START_FREQUENCIES_HZ,
             ),
         ),
         None => (
@@ -237,7 +231,7 @@ pub fn fit_oil_column(
                 &table,
                 geometry,
                 &|_| Complex64::new(1.0, 0.0),
-                true,
+                &OTHER_START_FREQUENCIES_HZ,
             ),
         ),
     };
@@ -253,7 +247,7 @@ pub fn fit_oil_column(
         .ok()
         .and_then(|h1| {
             let unit = |_| Complex64::new(1.0, 0.0);
-            fit_stiffness_and_leakage(&h1, &table, geometry, &unit, false)
+            fit_stiffness_and_leakage(&h1, &table, geometry, &unit, &[])
         });
     let fitted = FittedColumn {
         name,
