@@ -430,13 +430,8 @@ mod tests {
     #[test]
     fn a_displacement_following_an_unrecorded_reference_is_set_aside() {
         use crate::campaign::provenance::{ChannelSource, Source, Sources};
-        use crate::campaign::synth::{synthesise, SynthOptions};
-        let opts = SynthOptions {
-            random_duration_s: 12.0,
-            tests: Some(vec!["R2".into()]),
-            ..SynthOptions::default()
-        };
-        let mut c = synthesise(&crate::params::Params::trees_lab(), &opts, None);
+        use crate::campaign::synth::short_campaign;
+        let mut c = short_campaign(&crate::params::Params::trees_lab(), &["R2"], 12.0);
         assert_eq!(
             c.info.tests[0].control,
             crate::campaign::Control::Acceleration

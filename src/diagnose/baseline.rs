@@ -438,18 +438,13 @@ pub(super) use refine::{refine_output_error, FreedFit, Refined};
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::campaign::synth::{synthesise, SynthOptions};
+    use crate::campaign::synth::short_campaign;
 
     /// The table mass is a scale only while nothing reads the force: a recorded force or a
     /// known delta-P gain (the command then holds `Kdp M a`) makes it measurable.
     #[test]
     fn the_mass_is_a_scale_only_while_nothing_reads_the_force() {
-        let opts = SynthOptions {
-            random_duration_s: 2.0,
-            tests: Some(vec!["R2".into()]),
-            ..SynthOptions::default()
-        };
-        let mut c = synthesise(&Params::trees_lab(), &opts, None);
+        let mut c = short_campaign(&Params::trees_lab(), &["R2"], 2.0);
         assert!(!mass_is_scale(&c), "the force is recorded");
         c.records[0].force_n = None;
         assert!(!mass_is_scale(&c), "the campaign states Kdp");

@@ -122,7 +122,7 @@ pub fn medians_by_channel(fits: &[ModelFit]) -> Vec<ChannelMedian> {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::campaign::synth::{synthesise, SynthOptions};
+    use crate::campaign::synth::short_campaign;
 
     /// On a campaign of a table with a specimen, the model with it follows the report
     /// quarters at their noise ceiling and the table alone does not; the medians are
@@ -134,12 +134,7 @@ mod tests {
         truth
             .apply_effect_spec("specimen:mass_kg=20000,frequency_hz=5,damping_ratio=0.03")
             .unwrap();
-        let opts = SynthOptions {
-            random_duration_s: 8.0,
-            tests: Some(vec!["R1".into(), "R2".into(), "R3".into()]),
-            ..SynthOptions::default()
-        };
-        let c = synthesise(&truth, &opts, None);
+        let c = short_campaign(&truth, &["R1", "R2", "R3"], 8.0);
         let fits = report_quarter_fits(&base, &truth, &c);
         let acc: Vec<&ModelFit> = fits
             .iter()

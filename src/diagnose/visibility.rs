@@ -157,19 +157,14 @@ fn smallest_visible(visible: impl Fn(f64) -> bool, lo: f64, hi: f64) -> Option<f
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::campaign::synth::{synthesise, SynthOptions};
+    use crate::campaign::synth::short_campaign;
     use crate::diagnose::residuals::estimate_noise;
     use crate::diagnose::Part;
 
     /// The test `test` (12 s) of `truth` as a lab without force, valve command or spool
     /// channels records it, and the whitening of `truth`'s prediction of it.
     fn motion_only(truth: &Params, test: &str) -> (Campaign, Whitening) {
-        let opts = SynthOptions {
-            random_duration_s: 12.0,
-            tests: Some(vec![test.into()]),
-            ..SynthOptions::default()
-        };
-        let mut c = synthesise(truth, &opts, None);
+        let mut c = short_campaign(truth, &[test], 12.0);
         for r in &mut c.records {
             r.force_n = None;
             r.spool_position = None;

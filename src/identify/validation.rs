@@ -96,7 +96,7 @@ fn simulated_acceleration(sim: Simulated) -> Result<Vec<f64>, IdentifyError> {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::campaign::synth::{synthesise, SynthOptions};
+    use crate::campaign::synth::short_campaign;
 
     /// A model whose run leaves the envelope (a flow gain, and with it the loop gain, 50
     /// times the table's) makes the validation unusable with an error that says the
@@ -104,12 +104,7 @@ mod tests {
     #[test]
     fn a_model_whose_run_stops_is_named_as_such() {
         let truth = Params::trees_lab();
-        let opts = SynthOptions {
-            random_duration_s: 8.0,
-            tests: Some(vec!["R2".into()]),
-            ..SynthOptions::default()
-        };
-        let c = synthesise(&truth, &opts, None);
+        let c = short_campaign(&truth, &["R2"], 8.0);
         assert!(validate(&c, "R2", &truth).is_ok());
         let mut unstable = truth;
         unstable.actuator.flow_gain_m3_s *= 50.0;

@@ -213,16 +213,12 @@ pub fn section(id: &Identification, rows: &[Row], with_truth: bool) -> Vec<Secti
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::campaign::synth::{synthesise, SynthOptions};
+    use crate::campaign::synth::short_campaign;
 
     #[test]
     fn every_report_row_is_an_estimate_and_carries_its_value() {
-        let opts = SynthOptions {
-            random_duration_s: 12.0,
-            tests: Some(vec!["R2".into()]),
-            ..SynthOptions::default()
-        };
-        let id = crate::identify::identify(&synthesise(&Params::trees_lab(), &opts, None));
+        let c = short_campaign(&Params::trees_lab(), &["R2"], 12.0);
+        let id = crate::identify::identify(&c);
         let rows = summary_rows(&id, Some(&Params::trees_lab()));
         let keys: Vec<&str> = rows.iter().map(|r| r.key.as_str()).collect();
         // section 4's sixteen in the report's order, then the device's, then the closed loop's

@@ -276,3 +276,15 @@ pub fn synthesise(params: &Params, opts: &SynthOptions, progress: Option<Progres
     synthesise_program(params, &selected_program(opts), opts, progress)
         .unwrap_or_else(|e| panic!("paper program: {e}"))
 }
+
+/// The paper's tests `names` of `truth` at the default seed and noise, their random
+/// records `random_duration_s` long: the short campaign a unit test builds.
+#[cfg(test)]
+pub(crate) fn short_campaign(truth: &Params, names: &[&str], random_duration_s: f64) -> Campaign {
+    let opts = SynthOptions {
+        random_duration_s,
+        tests: Some(names.iter().map(|n| n.to_string()).collect()),
+        ..SynthOptions::default()
+    };
+    synthesise(truth, &opts, None)
+}

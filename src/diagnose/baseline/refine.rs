@@ -211,7 +211,7 @@ fn trace_ranges(p0: &Params, free: &[BaselineParameter], ranges: &[Range], ends:
 mod tests {
     use super::super::{mass_is_scale, table_from_motion, unknown_gains, BaselineParameter};
     use super::*;
-    use crate::campaign::synth::{synthesise, SynthOptions};
+    use crate::campaign::synth::short_campaign;
     use crate::campaign::ControllerOverride;
     use crate::diagnose::part::Part;
     use crate::diagnose::residuals::estimate_noise;
@@ -229,12 +229,7 @@ mod tests {
     #[test]
     fn an_unknown_delta_p_gain_is_refined_from_zero() {
         let truth = Params::trees_lab();
-        let opts = SynthOptions {
-            random_duration_s: 12.0,
-            tests: Some(vec!["R2".into()]),
-            ..SynthOptions::default()
-        };
-        let mut c = synthesise(&truth, &opts, None);
+        let mut c = short_campaign(&truth, &["R2"], 12.0);
         for r in &mut c.records {
             r.force_n = None;
             r.spool_position = None;

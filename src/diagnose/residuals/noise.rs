@@ -236,7 +236,7 @@ fn command_from_gains(c: &Campaign, sensor: &PerChannel<Option<f64>>) -> Option<
 mod tests {
     use super::*;
     use crate::campaign::provenance::{ChannelSource, Source, Sources};
-    use crate::campaign::synth::{synthesise, SynthOptions, REST_S, SAMPLE_RATE_HZ};
+    use crate::campaign::synth::{short_campaign, REST_S, SAMPLE_RATE_HZ};
     use crate::campaign::Control;
 
     /// A test's rest segment is where its recorded references hold their first value:
@@ -244,12 +244,7 @@ mod tests {
     /// offset counts; the floor then comes from the rest segments.
     #[test]
     fn the_rest_segment_is_read_off_the_recorded_references() {
-        let opts = SynthOptions {
-            random_duration_s: 2.0,
-            tests: Some(vec!["R1".into()]),
-            ..SynthOptions::default()
-        };
-        let mut c = synthesise(&crate::params::Params::trees_lab(), &opts, None);
+        let mut c = short_campaign(&crate::params::Params::trees_lab(), &["R1"], 2.0);
         assert_eq!(c.info.tests[0].control, Control::Displacement);
         let rest = (REST_S * SAMPLE_RATE_HZ) as usize;
         assert!(c.rest_samples(0) >= rest);

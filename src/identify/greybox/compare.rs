@@ -347,7 +347,7 @@ pub fn compare(
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::campaign::synth::{synthesise, SynthOptions};
+    use crate::campaign::synth::short_campaign;
 
     /// Points of fit % by which the true table's noise-free simulation may exceed the
     /// noise ceiling: the noise's own draw over a test (its RMS over 8 s is known to a
@@ -361,12 +361,7 @@ mod tests {
     #[test]
     fn the_true_table_fits_no_better_than_the_noise_at_rest_allows() {
         let truth = Params::trees_lab();
-        let opts = SynthOptions {
-            random_duration_s: 8.0,
-            tests: Some(vec!["R1".into(), "S1".into()]),
-            ..SynthOptions::default()
-        };
-        let c = synthesise(&truth, &opts, None);
+        let c = short_campaign(&truth, &["R1", "S1"], 8.0);
         let tests = [(0, Role::Validation), (1, Role::Validation)];
         let cmp = compare(&truth, &c, &tests, &[Measured::Acceleration]);
         assert_eq!(cmp.fits.len(), 2, "{:?}", cmp.stopped);
