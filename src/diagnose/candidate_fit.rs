@@ -55,8 +55,8 @@ fn candidate_free(c: &Campaign, base: &Params) -> Vec<BaselineParameter> {
 /// a 33.5-t specimen on a 15-t table, the identified mass 48.5 t, left the candidate's
 /// table at the plain range's bound, 24 t, and a foundation was named.
 fn effect_range(e: Effect, bases: &[Params], which: BaselineParameter) -> Range {
-    let mut r = candidate_range(bases, which);
     use BaselineParameter::{BulkModulus, TableMass};
+    let mut r = candidate_range(bases, which);
     let specimen = matches!(e.row().takes_out, TakesOut::NewestModeMass);
     if specimen && matches!(which, TableMass | BulkModulus) {
         r.lower *= MIN_TABLE_MASS_SHARE;
@@ -273,7 +273,7 @@ impl<'a> CandidateFit<'a> {
             TakesOut::Nothing => {}
             TakesOut::NewestModeMass => {
                 if let Some(m_kg) = e.newest_mode_mass().and_then(|k| s.try_get(k)) {
-                    let mode_hz = e.valley_frequency().and_then(|k| s.try_get(k));
+                    let mode_hz = e.newest_mode_frequency().and_then(|k| s.try_get(k));
                     take_out_specimen(&mut fixed, m_kg, mode_hz);
                 }
             }
@@ -439,17 +439,16 @@ mod tests {
             let s = EffectValues::from_layout(e, &layout);
             let key = e.newest_mode_mass().unwrap();
             assert_eq!(s.try_get(key), Some(layout[3 * (n - 1)]));
-            let frequency = e.valley_frequency().unwrap();
+            let frequency = e.newest_mode_frequency().unwrap();
             assert_eq!(s.try_get(frequency), Some(layout[3 * (n - 1) + 1]));
         }
         let f = Effect::of(&crate::effects::foundation::EFFECT);
         let s = EffectValues::from_layout(f, &[2e5, 12.0, 0.05]);
         assert_eq!(s.try_get("mass_kg"), Some(2e5));
         assert_eq!(s.try_get("frequency_hz"), Some(12.0));
-        assert_eq!(
-            Effect::of(&crate::effects::valve_deadband::EFFECT).newest_mode_mass(),
-            None
-        );
+        let deadband = Effect::of(&crate::effects::valve_deadband::EFFECT);
+        assert_eq!(deadband.newest_mode_mass(), None);
+        assert_eq!(deadband.newest_mode_frequency(), None);
     }
 
     /// A specimen's start leaves the table at least its share; a soft foundation leaves
