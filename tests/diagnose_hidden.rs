@@ -489,8 +489,8 @@ fn finds_a_specimen_on_a_lighter_table() {
 /// stiffens section 4's oil column, fitted behind the whole identified mass (bulk modulus
 /// +115 %); until stop 52 the specimen's fit could neither take that stiffness out nor move
 /// the table mass below half the identified 48.5 t, and a foundation was named (11.6 Hz,
-/// `explained: false`). Seed 607 (26 t at 13.1 Hz) passes too; seed 605 (33 t at 4.4 Hz)
-/// does not: `identify`'s rigid mass over 2-20 Hz comes out 4.4 t, the refined baseline
+/// `explained: false`). Seeds 607-611 (4-35 t; 609 named a foundation before) pass too;
+/// seed 605 (33 t at 4.4 Hz) does not: `identify`'s rigid mass over 2-20 Hz comes out 4.4 t, the refined baseline
 /// diverges, and no cause is named (README, "Identification").
 #[test]
 fn finds_a_specimen_twice_as_heavy_as_its_table() {
