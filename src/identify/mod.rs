@@ -182,6 +182,7 @@ impl Identification {
             "missing": self.missing,
             "screening": self.screening,
             "defaults": self.defaults().into_iter().map(|(k, r)| json!({"key": k, "reason": r})).collect::<Vec<_>>(),
+            "warnings": self.warnings(),
         });
         let mut unc = Map::new();
         for e in self.estimates() {
@@ -207,6 +208,15 @@ impl Identification {
         out["closed_loop"] = serde_json::to_value(&self.closed_loop).unwrap_or(Value::Null);
         out["comparison"] = serde_json::to_value(&self.comparison).unwrap_or(Value::Null);
         out
+    }
+
+    /// What the estimates should not be taken for: an apparent mass that is not a rigid
+    /// body's ([`MassFit::not_rigid`]).
+    pub fn warnings(&self) -> Vec<String> {
+        self.mass_random
+            .iter()
+            .filter_map(|m| m.not_rigid())
+            .collect()
     }
 
     /// The parameter-file keys that hold a default, not an identified value, and why (the

@@ -73,6 +73,11 @@ pub struct MassFit {
     pub stiffness_like_n_m: f64,
     /// A plain average of Re(F/a) over 1-5 Hz, to show the friction's bias.
     pub plain_average_kg: f64,
+    /// RMS over the band of `|F/a - fit| / M`: how far the apparent mass is from a rigid
+    /// body's with friction ([`MassFit::not_rigid`]).
+    pub rigid_misfit: f64,
+    /// Where that misfit is largest, Hz.
+    pub rigid_misfit_peak_hz: f64,
     pub measured: FrfData,
 }
 

@@ -74,6 +74,10 @@ pub fn run(args: Args) -> anyhow::Result<()> {
     if let Some(k) = shaketable::diagnose::kinematics::check(&campaign) {
         println!("{}", k.text());
     }
+    // a resonance in the mass band: the rigid model's mass is a compromise, say so
+    for w in id.warnings() {
+        println!("warning: {w}");
+    }
     for m in &id.missing {
         println!("not identified: {m}");
     }
