@@ -113,7 +113,7 @@ impl MassFit {
                  one body stays below {RIGID_MISFIT_LIMIT}), most at {:.2} Hz: a resonance \
                  on the table (a specimen, a foundation) makes the mass of {:.0} kg and the \
                  estimates that rest on it a rigid model's compromise; `shaketable \
-                 diagnose` names what moves",
+                 diagnose` looks for what moves",
                 self.test,
                 self.rigid_misfit,
                 MASS_BAND_HZ[0],

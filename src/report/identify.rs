@@ -25,6 +25,15 @@ pub fn write(
         read::section(&id.read),
         read::screening_section(&id.screening),
     ];
+    // what the estimates should not be taken for, before the estimates
+    let warnings = id.warnings();
+    if !warnings.is_empty() {
+        sections.push(Section::tables(
+            "Warnings",
+            warnings.join("\n\n"),
+            Vec::new(),
+        ));
+    }
     sections.extend(summary::section(id, rows, with_truth));
     sections.push(comparison_section(id));
     let paper = section4::sections(dir, id)?;
