@@ -7,7 +7,6 @@ use super::signals::{channel, smooth, welch_for};
 use super::{check_bounds, check_random_length, lsq, MASS_BAND_HZ, MASS_BOUNDS_KG};
 use crate::campaign::{Measured, Record};
 use nalgebra::{DMatrix, DVector};
-use num_complex::Complex64;
 use std::f64::consts::PI;
 
 /// Apparent mass from a random test (4.1.2): `acceleration -> force` instrumented by the
@@ -66,12 +65,14 @@ pub fn fit_mass_corrected(
     let (x, sigma) =
         lsq::linear(&a, &b).ok_or_else(|| IdentifyError::failed(name, "mass fit failed"))?;
     check_bounds(name, "mass (kg)", x[0], MASS_BOUNDS_KG)?;
+    // each bin's misfit from the system's own residual (its real and imaginary rows)
+    let residual = &a * &x - &b;
     let misfit: Vec<(f64, f64)> = idx
         .iter()
-        .map(|&i| {
-            let om = 2.0 * PI * e.frequency_hz[i];
-            let fitted = Complex64::new(x[0] - x[2] / (om * om), -x[1] / om);
-            (e.frequency_hz[i], (e.h1[i] - fitted).norm() / x[0])
+        .enumerate()
+        .map(|(r, &i)| {
+            let bin = residual[2 * r].hypot(residual[2 * r + 1]);
+            (e.frequency_hz[i], bin / x[0])
         })
         .collect();
     let rigid_misfit = (misfit.iter().map(|m| m.1 * m.1).sum::<f64>() / misfit.len() as f64).sqrt();
