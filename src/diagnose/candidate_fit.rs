@@ -48,17 +48,14 @@ fn candidate_free(c: &Campaign, base: &Params) -> Vec<BaselineParameter> {
 }
 
 /// [`candidate_range`] of the baseline parameter `which` under the effect `e`: a
-/// specimen's extends the table mass and the bulk modulus down by the share its start may
-/// take out ([`MIN_TABLE_MASS_SHARE`], [`CandidateFit::start_on`]). The identified mass
-/// holds a specimen's, and section 4's oil column is stiffened with it (its fit puts the
-/// identified mass behind a column that moves the table alone above the specimen's mode):
-/// a 33.5-t specimen on a 15-t table, the identified mass 48.5 t, left the candidate's
-/// table at the plain range's bound, 24 t, and a foundation was named.
+/// specimen's extends the table mass down by the share its start may take out
+/// ([`MIN_TABLE_MASS_SHARE`], [`CandidateFit::start_on`]): the identified mass holds a
+/// specimen's, and a 33.5-t specimen on a 15-t table (identified 48.5 t) left the
+/// candidate's table at the plain range's bound, 24 t, and a foundation was named.
 fn effect_range(e: Effect, bases: &[Params], which: BaselineParameter) -> Range {
-    use BaselineParameter::{BulkModulus, TableMass};
     let mut r = candidate_range(bases, which);
     let specimen = matches!(e.row().takes_out, TakesOut::NewestModeMass);
-    if specimen && matches!(which, TableMass | BulkModulus) {
+    if specimen && which == BaselineParameter::TableMass {
         r.lower *= MIN_TABLE_MASS_SHARE;
     }
     r
@@ -163,23 +160,6 @@ fn table_mass_under_specimen(table_mass_kg: f64, newest_mode_mass_kg: f64) -> f6
     (table_mass_kg - newest_mode_mass_kg).max(MIN_TABLE_MASS_SHARE * table_mass_kg)
 }
 
-/// The oil column's frequency of `p`'s actuator on `p`'s table mass, Hz.
-fn oil_column_frequency_hz(p: &Params) -> f64 {
-    (p.actuator.oil_column_stiffness_n_m() / p.table.mass_kg).sqrt() / (2.0 * std::f64::consts::PI)
-}
-
-/// Take a specimen's mode of `mass_kg` at `frequency_hz` out of the identified baseline
-/// `p` ([`CandidateFit::start_on`]): out of the table mass ([`table_mass_under_specimen`]),
-/// and, for a mode below the oil column, out of the column's stiffness in proportion,
-/// which keeps the column's frequency (above the mode the table alone moves with it).
-fn take_out_specimen(p: &mut Params, mass_kg: f64, frequency_hz: Option<f64>) {
-    let table_kg = table_mass_under_specimen(p.table.mass_kg, mass_kg);
-    if frequency_hz.is_some_and(|f| f < oil_column_frequency_hz(p)) {
-        p.actuator.bulk_modulus_pa *= table_kg / p.table.mass_kg;
-    }
-    p.table.mass_kg = table_kg;
-}
-
 /// The factor on the bulk modulus under a foundation's start of `mass_kg` at
 /// `frequency_hz` on a base whose identified oil column is `k_id_n_m`: that column is the
 /// oil and the foundation springs in series, `1/k_id = 1/k_oil + 1/k_f`, so the oil alone
@@ -258,11 +238,9 @@ impl<'a> CandidateFit<'a> {
     /// The start `s` of the effect on the baseline `b`: the valve as fitted on the spool,
     /// whichever base the start comes from (the friction's yield and shape stay the
     /// base's own: the refined ones may have bent to absorb the effect, the section-4
-    /// ones have not), and what the identified baseline holds of the effect taken out. A
-    /// specimen's mode below the oil column leaves the table alone behind the column, so
-    /// its start scales the bulk modulus with the table mass (the column's frequency kept):
-    /// section 4 fitted the column behind the whole identified mass, stiffening it (bulk
-    /// modulus +67 % for a 3-t specimen on a 6-t table).
+    /// ones have not), and what the identified baseline holds of the effect taken out (a
+    /// specimen's mass out of the table's; section 4 fits the oil column behind the
+    /// measured apparent mass, the specimen's resonance in it, so the column stays).
     fn start_on(&self, b: &Params, s: &EffectValues) -> Start {
         let mut fixed = *b;
         for which in BaselineParameter::VALVE {
@@ -273,8 +251,7 @@ impl<'a> CandidateFit<'a> {
             TakesOut::Nothing => {}
             TakesOut::NewestModeMass => {
                 if let Some(m_kg) = e.newest_mode_mass().and_then(|k| s.try_get(k)) {
-                    let mode_hz = e.newest_mode_frequency().and_then(|k| s.try_get(k));
-                    take_out_specimen(&mut fixed, m_kg, mode_hz);
+                    fixed.table.mass_kg = table_mass_under_specimen(fixed.table.mass_kg, m_kg);
                 }
             }
             TakesOut::FoundationSpring => {
@@ -439,8 +416,6 @@ mod tests {
             let s = EffectValues::from_layout(e, &layout);
             let key = e.newest_mode_mass().unwrap();
             assert_eq!(s.try_get(key), Some(layout[3 * (n - 1)]));
-            let frequency = e.newest_mode_frequency().unwrap();
-            assert_eq!(s.try_get(frequency), Some(layout[3 * (n - 1) + 1]));
         }
         let f = Effect::of(&crate::effects::foundation::EFFECT);
         let s = EffectValues::from_layout(f, &[2e5, 12.0, 0.05]);
@@ -448,7 +423,6 @@ mod tests {
         assert_eq!(s.try_get("frequency_hz"), Some(12.0));
         let deadband = Effect::of(&crate::effects::valve_deadband::EFFECT);
         assert_eq!(deadband.newest_mode_mass(), None);
-        assert_eq!(deadband.newest_mode_frequency(), None);
     }
 
     /// A specimen's start leaves the table at least its share; a soft foundation leaves
@@ -465,29 +439,10 @@ mod tests {
         assert!(factor > 1.0 && factor < 1.01);
     }
 
-    /// A specimen's mode below the oil column takes its share of the column's stiffness
-    /// out with its mass, the column's frequency kept; a mode above leaves the column.
+    /// A specimen's fit may move the table mass down as far as its start may take it; the
+    /// column and the other effects keep the plain range.
     #[test]
-    fn a_specimen_below_the_oil_column_keeps_its_frequency() {
-        let mut identified = Params::trees_lab();
-        identified.table.mass_kg = 48.5e3;
-        let column_hz = oil_column_frequency_hz(&identified);
-        let mut below = identified;
-        take_out_specimen(&mut below, 33.5e3, Some(0.5 * column_hz));
-        assert_eq!(below.table.mass_kg, 15e3);
-        assert!((oil_column_frequency_hz(&below) / column_hz - 1.0).abs() < 1e-12);
-        let ratio = below.actuator.bulk_modulus_pa / identified.actuator.bulk_modulus_pa;
-        assert!((ratio - 15.0 / 48.5).abs() < 1e-12, "{ratio}");
-        let mut above = identified;
-        take_out_specimen(&mut above, 10e3, Some(2.0 * column_hz));
-        assert_eq!(above.table.mass_kg, 38.5e3);
-        assert_eq!(above.actuator, identified.actuator);
-    }
-
-    /// A specimen's fit may move the table mass and the bulk modulus down as far as its
-    /// start may take them; the other effects keep the plain range.
-    #[test]
-    fn a_specimen_widens_the_table_mass_and_column_ranges_down() {
+    fn a_specimen_widens_the_table_mass_range_down() {
         let bases = [Params::trees_lab()];
         let specimen = Effect::of(&crate::effects::specimen::EFFECT);
         let foundation = Effect::of(&crate::effects::foundation::EFFECT);
@@ -495,7 +450,12 @@ mod tests {
             let plain = candidate_range(&bases, which);
             assert_eq!(effect_range(foundation, &bases, which), plain);
             let widened = effect_range(specimen, &bases, which);
-            assert_eq!(widened.lower, MIN_TABLE_MASS_SHARE * plain.lower);
+            let share = if which == BaselineParameter::TableMass {
+                MIN_TABLE_MASS_SHARE
+            } else {
+                1.0
+            };
+            assert_eq!(widened.lower, share * plain.lower);
             assert_eq!(widened.upper, plain.upper);
         }
         let leakage = BaselineParameter::Leakage;

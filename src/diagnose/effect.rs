@@ -105,16 +105,6 @@ impl Effect {
         }
     }
 
-    /// The key among [`Effect::parameters`] of the specimen's newest mode's frequency,
-    /// `None` for the other effects.
-    pub(super) fn newest_mode_frequency(self) -> Option<&'static str> {
-        match self.specimen_modes()? {
-            1 => Some("frequency_hz"),
-            2 => Some("mode2.frequency_hz"),
-            _ => Some("mode3.frequency_hz"),
-        }
-    }
-
     /// The specimen's modes (1 to 3), `None` for the other effects.
     pub fn specimen_modes(self) -> Option<usize> {
         self.0.specimen_modes

@@ -102,8 +102,15 @@ fn mass_random(dir: &Path, m: &MassFit) -> Result<Vec<Section>, ReportError> {
     let f = &m.measured.frequency_hz;
     let fit: Vec<f64> = f
         .iter()
-        .map(|x| m.mass_kg - m.stiffness_like_n_m / (2.0 * PI * x).powi(2))
+        .map(|&x| match &m.carried_mode {
+            Some(mode) => mode.apparent_mass(x).re,
+            None => m.mass_kg - m.stiffness_like_n_m / (2.0 * PI * x).powi(2),
+        })
         .collect();
+    let fit_label = match m.carried_mode {
+        Some(_) => "fit: a table carrying one mode",
+        None => "fit M - k/w^2",
+    };
     let flat = vec![m.mass_kg; f.len()];
     xy_png(
         &dir.join("mass_random.png"),
@@ -118,7 +125,7 @@ fn mass_random(dir: &Path, m: &MassFit) -> Result<Vec<Section>, ReportError> {
                 points: true,
             },
             Series {
-                label: "fit M - k/w^2",
+                label: fit_label,
                 x: f,
                 y: &fit,
                 points: false,
@@ -141,9 +148,22 @@ fn mass_random(dir: &Path, m: &MassFit) -> Result<Vec<Section>, ReportError> {
              k = {:.3e} N/m. A plain average of Re(F/a) over 1-5 Hz gives {:.0} kg.",
             m.test, crate::identify::MASS_BAND_HZ[0], crate::identify::MASS_BAND_HZ[1], m.mass_kg, m.sigma_mass_kg,
             m.viscous_n_s_m, m.stiffness_like_n_m, m.plain_average_kg
-        ),
+        ) + &carried_mode_text(m),
     ));
     Ok(sections)
+}
+
+/// What the mass figure says of a table carrying one mode, empty for a rigid one.
+fn carried_mode_text(m: &MassFit) -> String {
+    m.carried_mode.as_ref().map_or(String::new(), |mode| {
+        format!(
+            " The apparent mass is not a rigid body's (misfit {:.2} of the mass, most at {:.2} Hz): \
+             a table of {:.0} kg carrying {:.0} kg on a mode at {:.2} Hz (damping ratio {:.3}) fits it, \
+             and M is their sum, what moves below the mode.",
+            m.rigid_misfit, m.rigid_misfit_peak_hz, mode.table_kg, mode.carried_kg,
+            mode.frequency_hz, mode.damping_ratio
+        )
+    })
 }
 
 /// Figure 6: spool -> force and the actuator model (4.1.3).
