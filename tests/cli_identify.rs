@@ -74,6 +74,9 @@ fn identify_writes_json_params_and_report_that_simulate_accepts() {
         );
     }
     assert!((v["table"]["mass_kg"].as_f64().unwrap() / 41258.0 - 1.0).abs() < 0.02);
+    // a table that moves as one body: no carried mode, no warning
+    assert!(v["table"]["carried"].is_null(), "{}", v["table"]);
+    assert_eq!(v["warnings"].as_array().map(Vec::len), Some(0));
     assert!(
         v["uncertainty"]["oil_column"]["frequency_hz"]
             .as_f64()
@@ -138,6 +141,9 @@ fn missing_tests_and_spool_are_named_not_failed() {
     assert!(v["oil_column"]["frequency_hz"].is_null());
     // what the data allows is still identified
     assert!((v["table"]["mass_kg"].as_f64().unwrap() / 41258.0 - 1.0).abs() < 0.02);
+    // a table that moves as one body: no carried mode, no warning
+    assert!(v["table"]["carried"].is_null(), "{}", v["table"]);
+    assert_eq!(v["warnings"].as_array().map(Vec::len), Some(0));
     assert!(v["table"]["stiffness_n_m"].as_f64().unwrap().abs() < 2e4);
 }
 

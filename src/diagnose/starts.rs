@@ -7,7 +7,7 @@ use super::effect_values::EffectValues;
 use super::specimen_modes::{apart, specimen_values};
 use crate::campaign::{Campaign, TestKind};
 use crate::effects::specimen::SpecimenMode;
-use crate::identify::fit_carried_mode;
+use crate::identify::fit_table_with_modes;
 use crate::identify::frf::{Welch, WelchOptions};
 use crate::identify::select::random_roles;
 use crate::params::Params;
@@ -149,10 +149,10 @@ pub(super) fn stick_slip_grid() -> Vec<EffectValues> {
     g
 }
 
-/// A specimen's starts on a table of `table_mass_kg`: the table carrying one mode that
-/// fits the apparent mass `F/a` (identify's [`fit_carried_mode`], its mass, frequency and
-/// damping), and its resonance at the largest deviation of `F/a` from a rigid mass, at
-/// [`grid::SPECIMEN_MASS_RATIOS`]; the blind grid without the apparent mass.
+/// A specimen's starts on a table of `table_mass_kg`: each mode of the table carrying
+/// modes that fits the apparent mass `F/a` (identify's [`fit_table_with_modes`]: its mass,
+/// frequency and damping), and a resonance at the largest deviation of `F/a` from a rigid
+/// mass, at [`grid::SPECIMEN_MASS_RATIOS`]; the blind grid without the apparent mass.
 pub(super) fn specimen_starts(c: &Campaign, table_mass_kg: f64) -> Vec<EffectValues> {
     let m = table_mass_kg;
     let Some((f, h)) = apparent_mass(c) else {
@@ -160,20 +160,21 @@ pub(super) fn specimen_starts(c: &Campaign, table_mass_kg: f64) -> Vec<EffectVal
     };
     let specimen = Effect::of(&crate::effects::specimen::EFFECT);
     let bins: Vec<usize> = (0..f.len()).collect();
-    let carried = fit_carried_mode(&f, &h, &bins).map(|mode| {
-        resonance(
-            specimen,
-            mode.carried_kg,
-            mode.frequency_hz,
-            mode.damping_ratio,
-        )
-    });
+    let carried = fit_table_with_modes(&f, &h, &bins).map_or(vec![], |t| t.modes);
     let k = (0..f.len())
         .max_by(|&a, &b| (h[a] - m).norm().total_cmp(&(h[b] - m).norm()))
         .unwrap_or(0);
     let fs = f[k];
     carried
-        .into_iter()
+        .iter()
+        .map(|mode| {
+            resonance(
+                specimen,
+                mode.mass_kg,
+                mode.frequency_hz,
+                mode.damping_ratio,
+            )
+        })
         .chain(
             grid::SPECIMEN_MASS_RATIOS
                 .iter()

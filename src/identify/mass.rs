@@ -5,7 +5,7 @@
 use super::error::IdentifyError;
 use super::frf::FrfEstimate;
 use super::friction::bouc_wen_path;
-use super::mass_mode::{fit_carried_mode, CarriedMode};
+use super::mass_mode::{fit_table_with_modes, TableWithModes};
 use super::results::{FrfData, FrictionFit, MassFit};
 use super::signals::{channel, smooth, welch_for};
 use super::{check_bounds, check_random_length, lsq, MASS_BAND_HZ, MASS_BOUNDS_KG};
@@ -48,10 +48,9 @@ pub fn fit_mass_corrected(
     }
     let rigid =
         rigid_fit(&e, &idx).ok_or_else(|| IdentifyError::failed(name, "mass fit failed"))?;
-    let mode = (rigid.misfit > RIGID_MISFIT_LIMIT)
-        .then(|| fit_carried_mode(&e.frequency_hz, &e.h1, &idx))
-        .flatten()
-        .filter(|m| m.residual_rms_kg < MODE_FIT_GAIN * rigid.rms_kg);
+    let carried = (rigid.misfit > RIGID_MISFIT_LIMIT)
+        .then(|| fit_table_with_modes(&e.frequency_hz, &e.h1, &idx))
+        .flatten();
     let low = e.band(1.0, 5.0);
     let fit = MassFit {
         test: name.to_string(),
@@ -62,11 +61,11 @@ pub fn fit_mass_corrected(
         plain_average_kg: low.iter().map(|&i| e.h1[i].re).sum::<f64>() / low.len().max(1) as f64,
         rigid_misfit: rigid.misfit,
         rigid_misfit_peak_hz: rigid.misfit_peak_hz,
-        carried_mode: None,
+        carried: None,
         measured: FrfData::from(&e.frequency_hz, &e.h1, &e.coherence, [0.5, 50.0]),
     };
-    let fit = match mode {
-        Some(m) => fit.carrying(m),
+    let fit = match carried {
+        Some(t) => fit.carrying(t),
         None => fit,
     };
     check_bounds(name, "mass (kg)", fit.mass_kg, MASS_BOUNDS_KG)?;
@@ -100,8 +99,6 @@ struct RigidFit {
     /// [`MassFit::rigid_misfit`] and where it is largest.
     misfit: f64,
     misfit_peak_hz: f64,
-    /// RMS over the band of `|F/a - fit|`, kg.
-    rms_kg: f64,
 }
 
 /// The linear least squares `Re = M - k/w^2`, `Im = -c/w` over the bins `idx` of `e`,
@@ -139,14 +136,8 @@ fn rigid_fit(e: &FrfEstimate, idx: &[usize]) -> Option<RigidFit> {
         x,
         sigma,
         misfit_peak_hz,
-        rms_kg,
     })
 }
-
-/// The share of the rigid fit's residual that a table carrying one mode must stay under
-/// to be taken instead: a mode that halves the misfit is what bends the apparent mass;
-/// one that does not is not the explanation (a second mode, a foundation).
-const MODE_FIT_GAIN: f64 = 0.5;
 
 /// Largest [`MassFit::rigid_misfit`] of a table that moves as one body: measured 0.00-0.02
 /// on clean, stick-slip, deadband, flow and free-play campaigns of 6- and 41-t tables (0.01
@@ -157,14 +148,14 @@ pub const RIGID_MISFIT_LIMIT: f64 = 0.1;
 
 impl MassFit {
     /// This fit with the mass, viscous and stiffness-like terms of the table carrying
-    /// `mode`: the mass is what moves below the mode, table and carried body together.
-    fn carrying(self, mode: CarriedMode) -> MassFit {
+    /// modes: the mass is what moves below them, table and carried bodies together.
+    fn carrying(self, carried: TableWithModes) -> MassFit {
         MassFit {
-            mass_kg: mode.total_kg(),
-            sigma_mass_kg: mode.sigma_total_kg,
-            viscous_n_s_m: mode.viscous_n_s_m,
-            stiffness_like_n_m: mode.stiffness_like_n_m,
-            carried_mode: Some(mode),
+            mass_kg: carried.total_kg(),
+            sigma_mass_kg: carried.sigma_total_kg,
+            viscous_n_s_m: carried.viscous_n_s_m,
+            stiffness_like_n_m: carried.stiffness_like_n_m,
+            carried: Some(carried),
             ..self
         }
     }
@@ -174,20 +165,17 @@ impl MassFit {
     /// what rests on it, are then a rigid model's compromise, not the table's.
     pub fn not_rigid(&self) -> Option<String> {
         (self.rigid_misfit > RIGID_MISFIT_LIMIT).then(|| {
-            let carried = match &self.carried_mode {
-                Some(m) => format!(
-                    "a table of {:.0} kg carrying {:.0} kg on a mode at {:.2} Hz (damping \
-                     ratio {:.3}) fits it, and the mass taken is their sum, {:.0} kg, what \
-                     moves below the mode",
-                    m.table_kg,
-                    m.carried_kg,
-                    m.frequency_hz,
-                    m.damping_ratio,
-                    m.total_kg()
+            let carried = match &self.carried {
+                Some(t) => format!(
+                    "a table of {:.0} kg carrying {} fits it, and the mass taken is their \
+                     sum, {:.0} kg, what moves below the modes",
+                    t.table_kg,
+                    carried_modes_text(t),
+                    t.total_kg()
                 ),
                 None => format!(
-                    "no table carrying one mode fits it better by half; the mass taken is \
-                     the rigid fit's, {:.0} kg",
+                    "no table carrying modes fits it better by half; the mass taken is the \
+                     rigid fit's, {:.0} kg",
                     self.mass_kg
                 ),
             };
@@ -206,6 +194,21 @@ impl MassFit {
             )
         })
     }
+}
+
+/// `"33122 kg on a mode at 4.43 Hz (damping ratio 0.058)"`, the modes joined by "and".
+pub(crate) fn carried_modes_text(t: &TableWithModes) -> String {
+    let modes: Vec<String> = t
+        .modes
+        .iter()
+        .map(|m| {
+            format!(
+                "{:.0} kg on a mode at {:.2} Hz (damping ratio {:.3})",
+                m.mass_kg, m.frequency_hz, m.damping_ratio
+            )
+        })
+        .collect();
+    modes.join(" and ")
 }
 
 #[cfg(test)]
@@ -249,20 +252,15 @@ mod tests {
         assert!(w.contains("of R2 is not a rigid body's"), "{w}");
         // the table carrying the mode: the mass taken is what moves below it, table and
         // specimen (measured +0.6 %); table -0.3 %, specimen +3 %, mode -0.1 %
-        let mode = bent.carried_mode.as_ref().expect("a carried mode");
+        let t = bent.carried.as_ref().expect("a carried mode");
         let total_kg = with.table.mass_kg + 15e3;
-        assert!(
-            (bent.mass_kg / total_kg - 1.0).abs() < 0.02,
-            "{}",
-            bent.mass_kg
-        );
-        assert_eq!(bent.mass_kg, mode.total_kg());
-        assert!(
-            (mode.table_kg / with.table.mass_kg - 1.0).abs() < 0.03,
-            "{mode:?}"
-        );
-        assert!((mode.carried_kg / 15e3 - 1.0).abs() < 0.1, "{mode:?}");
-        assert!((mode.frequency_hz / 4.5 - 1.0).abs() < 0.02, "{mode:?}");
-        assert!(rigid.carried_mode.is_none());
+        let near = |x: f64, truth: f64, tol: f64| (x / truth - 1.0).abs() < tol;
+        assert!(near(bent.mass_kg, total_kg, 0.02), "{}", bent.mass_kg);
+        assert_eq!(bent.mass_kg, t.total_kg());
+        assert!(near(t.table_kg, with.table.mass_kg, 0.03), "{t:?}");
+        assert_eq!(t.modes.len(), 1, "{t:?}");
+        assert!(near(t.modes[0].mass_kg, 15e3, 0.1), "{t:?}");
+        assert!(near(t.modes[0].frequency_hz, 4.5, 0.02), "{t:?}");
+        assert!(rigid.carried.is_none());
     }
 }

@@ -40,8 +40,9 @@ pub use device::fit_device;
 pub use error::IdentifyError;
 pub use estimates::{Estimate, Quantity};
 pub use friction::{bouc_wen_path, fit_friction, fit_triangles};
+pub(crate) use mass::carried_modes_text;
 pub use mass::{fit_mass, fit_mass_corrected};
-pub use mass_mode::{fit_carried_mode, CarriedMode};
+pub use mass_mode::{fit_table_with_modes, CarriedMode, TableWithModes};
 pub use missing::{Estimation, Missing};
 pub use oil_column::{fit_oil_column, OilColumnInput, OilGeometry};
 pub use periodic::{fit_friction_and_mass, fit_mass_periodic};
@@ -199,6 +200,9 @@ impl Identification {
             }
         }
         out["uncertainty"] = Value::Object(unc);
+        // the table carrying modes that the mass rests on, null for a rigid one
+        let carried = self.mass_random.as_ref().and_then(|m| m.carried.as_ref());
+        out["table"]["carried"] = serde_json::to_value(carried).unwrap_or(Value::Null);
         if let Some(d) = &self.device {
             out["device"]["test"] = json!(d.test);
             out["device"]["checked_on"] = d

@@ -1,7 +1,7 @@
 //! What each estimator of identification returns (paper section 4).
 
 use super::frf::{band_indices, WelchOptions};
-use super::mass_mode::CarriedMode;
+use super::mass_mode::TableWithModes;
 use crate::campaign::screen::Finding;
 use crate::linear::TfFigures;
 use crate::params::{Params, ServovalveModel};
@@ -79,9 +79,9 @@ pub struct MassFit {
     pub rigid_misfit: f64,
     /// Where that misfit is largest, Hz.
     pub rigid_misfit_peak_hz: f64,
-    /// When the apparent mass is not a rigid body's: the table carrying one mode that
-    /// fits it, whose total mass is then [`MassFit::mass_kg`].
-    pub carried_mode: Option<CarriedMode>,
+    /// When the apparent mass is not a rigid body's: the table carrying modes that fits
+    /// it, whose total mass is then [`MassFit::mass_kg`].
+    pub carried: Option<TableWithModes>,
     pub measured: FrfData,
 }
 

@@ -102,13 +102,13 @@ fn mass_random(dir: &Path, m: &MassFit) -> Result<Vec<Section>, ReportError> {
     let f = &m.measured.frequency_hz;
     let fit: Vec<f64> = f
         .iter()
-        .map(|&x| match &m.carried_mode {
-            Some(mode) => mode.apparent_mass(x).re,
+        .map(|&x| match &m.carried {
+            Some(t) => t.apparent_mass(x).re,
             None => m.mass_kg - m.stiffness_like_n_m / (2.0 * PI * x).powi(2),
         })
         .collect();
-    let fit_label = match m.carried_mode {
-        Some(_) => "fit: a table carrying one mode",
+    let fit_label = match m.carried {
+        Some(_) => "fit: a table carrying modes",
         None => "fit M - k/w^2",
     };
     let flat = vec![m.mass_kg; f.len()];
@@ -148,20 +148,21 @@ fn mass_random(dir: &Path, m: &MassFit) -> Result<Vec<Section>, ReportError> {
              k = {:.3e} N/m. A plain average of Re(F/a) over 1-5 Hz gives {:.0} kg.",
             m.test, crate::identify::MASS_BAND_HZ[0], crate::identify::MASS_BAND_HZ[1], m.mass_kg, m.sigma_mass_kg,
             m.viscous_n_s_m, m.stiffness_like_n_m, m.plain_average_kg
-        ) + &carried_mode_text(m),
+        ) + &carried_text(m),
     ));
     Ok(sections)
 }
 
-/// What the mass figure says of a table carrying one mode, empty for a rigid one.
-fn carried_mode_text(m: &MassFit) -> String {
-    m.carried_mode.as_ref().map_or(String::new(), |mode| {
+/// What the mass figure says of a table carrying modes, empty for a rigid one.
+fn carried_text(m: &MassFit) -> String {
+    m.carried.as_ref().map_or(String::new(), |t| {
         format!(
             " The apparent mass is not a rigid body's (misfit {:.2} of the mass, most at {:.2} Hz): \
-             a table of {:.0} kg carrying {:.0} kg on a mode at {:.2} Hz (damping ratio {:.3}) fits it, \
-             and M is their sum, what moves below the mode.",
-            m.rigid_misfit, m.rigid_misfit_peak_hz, mode.table_kg, mode.carried_kg,
-            mode.frequency_hz, mode.damping_ratio
+             a table of {:.0} kg carrying {} fits it, and M is their sum, what moves below the modes.",
+            m.rigid_misfit,
+            m.rigid_misfit_peak_hz,
+            t.table_kg,
+            crate::identify::carried_modes_text(t)
         )
     })
 }
