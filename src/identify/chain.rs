@@ -6,9 +6,9 @@ use super::frf::WelchOptions;
 use super::missing::{Estimation, Missing};
 use super::{
     fit_device, fit_friction, fit_mass, fit_mass_corrected, fit_mass_periodic, fit_oil_column,
-    fit_servovalve, fit_triangles, greybox, periodic, select, validate, DeviceFit, FrictionFit,
-    Identification, IdentifyError, MassFit, OilColumnFit, OilGeometry, PeriodicMassFit, Scope,
-    ServovalveFit, TriangleFit, Validation, RESOLUTION_HZ,
+    fit_servovalve, fit_triangles, greybox, periodic, select, validate, ColumnMass, DeviceFit,
+    FrictionFit, Identification, IdentifyError, MassFit, OilColumnFit, OilGeometry,
+    PeriodicMassFit, Scope, ServovalveFit, TriangleFit, Validation, RESOLUTION_HZ,
 };
 use crate::campaign::screen::{Action, Screening};
 use crate::campaign::{Campaign, Record};
@@ -20,7 +20,11 @@ pub fn identify_screened_with(s: &Screening, scope: Scope) -> Identification {
     let mut chain = Chain::new(s);
     let servovalve = chain.servovalve();
     let mechanics = chain.mechanics();
-    let oil_column = chain.oil_column(servovalve.is_some(), mechanics.mass_kg);
+    let column_mass = mechanics.mass_kg.map(|mass_kg| ColumnMass {
+        mass_kg,
+        carrying_modes: (mechanics.mass_random.as_ref()).is_some_and(|m| m.carried.is_some()),
+    });
+    let oil_column = chain.oil_column(servovalve.is_some(), column_mass);
     let validation = chain.validation();
     let device = match scope {
         Scope::Complete => chain.keep(Estimation::Device, device_fit(s)),
@@ -249,13 +253,13 @@ impl<'a> Chain<'a> {
         }
     }
 
-    /// The oil column (4.1.3) with the identified mass `mass_kg`, the identified
+    /// The oil column (4.1.3) behind the identified `mass`, the identified
     /// servovalve (when `with_valve`) carrying the valve command to the spool; written
     /// into the parameters.
-    fn oil_column(&mut self, with_valve: bool, mass_kg: Option<f64>) -> Option<OilColumnFit> {
+    fn oil_column(&mut self, with_valve: bool, mass: Option<ColumnMass>) -> Option<OilColumnFit> {
         let c = self.c;
         let valve_tf = with_valve.then(|| ValveTf::new(&self.p));
-        let fit = match (self.roles.oil_column, mass_kg) {
+        let fit = match (self.roles.oil_column, mass) {
             (Some(i), Some(m)) => OilGeometry::from_campaign(&c.info.geometry).and_then(|og| {
                 let name = test_name(c, i);
                 let fs = c.sample_rate_of(i);

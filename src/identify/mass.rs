@@ -30,6 +30,30 @@ pub fn fit_mass_corrected(
     fs: f64,
     friction: Option<(&FrictionFit, f64)>,
 ) -> Result<MassFit, IdentifyError> {
+    fit_mass_as(name, rec, fs, friction, Modes::WhenNotRigid)
+}
+
+/// [`fit_mass`] as a rigid body whatever the misfit: the oil column's own reading of its
+/// test's mass when the mass test's apparent mass was rigid (a smaller test's noisier
+/// apparent mass may pass the misfit limit on a rigid table: R3 of a 6-t table).
+pub(super) fn fit_rigid_mass(name: &str, rec: &Record, fs: f64) -> Result<MassFit, IdentifyError> {
+    fit_mass_as(name, rec, fs, None, Modes::Never)
+}
+
+/// Whether a mass fit may take a table carrying modes.
+#[derive(Clone, Copy, PartialEq)]
+enum Modes {
+    WhenNotRigid,
+    Never,
+}
+
+fn fit_mass_as(
+    name: &str,
+    rec: &Record,
+    fs: f64,
+    friction: Option<(&FrictionFit, f64)>,
+    modes: Modes,
+) -> Result<MassFit, IdentifyError> {
     const WITHOUT: &str = "mass not identified";
     let measured_force = channel(name, rec, Measured::Force, WITHOUT)?;
     let acceleration = channel(name, rec, Measured::Acceleration, WITHOUT)?;
@@ -48,9 +72,16 @@ pub fn fit_mass_corrected(
     }
     let rigid =
         rigid_fit(&e, &idx).ok_or_else(|| IdentifyError::failed(name, "mass fit failed"))?;
-    let carried = (rigid.misfit > RIGID_MISFIT_LIMIT)
+    let carried = (modes == Modes::WhenNotRigid && rigid.misfit > RIGID_MISFIT_LIMIT)
         .then(|| fit_table_with_modes(&e.frequency_hz, &e.h1, &idx))
         .flatten();
+    eprintln!(
+        "DBG {name} misfit {:.3} carried {:?}",
+        rigid.misfit,
+        carried
+            .as_ref()
+            .map(|t| (t.table_kg, t.modes.clone(), t.total_kg()))
+    );
     let low = e.band(1.0, 5.0);
     let fit = MassFit {
         test: name.to_string(),

@@ -20,7 +20,7 @@ use std::f64::consts::PI;
 /// The modes' frequency grid reaches this factor above the highest bin: a mode a little
 /// above the band still bends its top end, while one below the lowest bin is only placed
 /// by extrapolation (a 1.1-t mode at 2.2 Hz, at the 2-Hz band's edge, came out as 23 t at
-/// 0.93 Hz when the grid began at 1 Hz).
+/// 0.93 Hz when the grid began at 1 Hz), and the grid begins [`SMEARED_BINS`] above it.
 const ABOVE_BAND: f64 = 1.5;
 /// The damping ratio's grid: from a lightly damped steel frame to a heavily damped
 /// isolation layer.
@@ -49,10 +49,11 @@ const MIN_MODE_SHARE: f64 = 0.02;
 /// Measured apparent masses leave 0.4 % and more (the spectral estimate's noise and smear).
 const RESIDUAL_FLOOR: f64 = 1e-3;
 
-/// A further mode keeps at least this factor in frequency from the modes placed: closer,
-/// two modes split one whose peak the spectral estimate smeared (a 38-t mode at 3.97 Hz
-/// came out as 29 t at 3.88 and 10 t at 4.18); the diagnosis's modes keep the same
-/// distance.
+/// A further mode keeps at least this factor in frequency from the modes placed, and
+/// outside their smeared bins ([`SMEARED_BINS`]): closer, two modes split one whose peak
+/// the spectral estimate smeared (a 38-t mode at 3.97 Hz came out as 29 t at 3.88 and
+/// 10 t at 4.18; 33 t at 4.43 Hz as 8 t at 4.03 and 24 t at 4.5); the diagnosis's modes
+/// keep the same factor.
 const MODE_SEPARATION: f64 = 1.1;
 
 /// Bins on either side of a mode that the spectral estimate smears (a Hann window's main
@@ -266,15 +267,19 @@ pub fn fit_table_with_modes(
         apparent,
         bins,
     };
-    // modes where the data can place them: from the lowest bin to a little above the
-    // highest (a mode there still bends the band's top end)
+    // modes where the data can place them: from the smeared bins above the lowest, so
+    // that both sides of a peak are seen (at the band's edge one side only shows, which
+    // friction's low-frequency bend imitates: 7.5 t at 1.73 Hz, 40 % damped, on a clean
+    // 6-t table), to a little above the highest (a mode there still bends the top end)
     let (lo, hi) = bins.iter().fold((f64::INFINITY, 0.0_f64), |(lo, hi), &i| {
         (lo.min(frequency_hz[i]), hi.max(frequency_hz[i]))
     });
-    if !(lo > 0.0 && hi > lo) {
+    let smeared = SMEARED_BINS * median_spacing_hz(frequency_hz, bins);
+    let lowest_mode_hz = lo + smeared;
+    if !(lo > 0.0 && hi > lowest_mode_hz) {
         return None;
     }
-    let frequencies = log_grid(lo, ABOVE_BAND * hi, POINTS_PER_DECADE);
+    let frequencies = log_grid(lowest_mode_hz, ABOVE_BAND * hi, POINTS_PER_DECADE);
     let dampings = log_grid(DAMPING_GRID[0], DAMPING_GRID[1], POINTS_PER_DECADE / 4.0);
     // fits with 0, 1, .. modes, each new one placed with the earlier held, then all zoomed
     let mut fits = vec![all.fit(&[])?];
@@ -288,9 +293,9 @@ pub fn fit_table_with_modes(
             .iter()
             .copied()
             .filter(|f| {
-                modes
-                    .iter()
-                    .all(|m| (f / m.0).ln().abs() >= MODE_SEPARATION.ln())
+                modes.iter().all(|m| {
+                    (f / m.0).ln().abs() >= MODE_SEPARATION.ln() && (f - m.0).abs() > smeared
+                })
             })
             .collect();
         modes.push((frequencies[0], dampings[0]));

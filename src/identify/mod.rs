@@ -44,7 +44,7 @@ pub(crate) use mass::carried_modes_text;
 pub use mass::{fit_mass, fit_mass_corrected};
 pub use mass_mode::{fit_table_with_modes, CarriedMode, TableWithModes};
 pub use missing::{Estimation, Missing};
-pub use oil_column::{fit_oil_column, OilColumnInput, OilGeometry};
+pub use oil_column::{fit_oil_column, ColumnMass, OilColumnInput, OilGeometry};
 pub use periodic::{fit_friction_and_mass, fit_mass_periodic};
 pub use results::*;
 pub use servovalve::{fit_servovalve, relative_error};

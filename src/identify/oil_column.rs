@@ -3,7 +3,7 @@
 use super::error::IdentifyError;
 use super::frf::{CrossSpectra, FrfEstimate};
 use super::lsq::{minimise, LsqOptions};
-use super::mass::fit_mass;
+use super::mass::{fit_mass, fit_rigid_mass};
 use super::results::{FrfData, OilColumnFit};
 use super::signals::{channel, spool_channel, welch_for};
 use super::{
@@ -182,6 +182,14 @@ fn fit_stiffness_and_leakage(
     }
 }
 
+/// The identified mass the oil column is fitted behind.
+#[derive(Debug, Clone, Copy)]
+pub struct ColumnMass {
+    pub mass_kg: f64,
+    /// Whether it is the mass of a table carrying modes ([`super::MassFit::carried`]).
+    pub carrying_modes: bool,
+}
+
 /// Oil column from R3 (4.1.3) for `k_oil`, `C_l` and a flow-gain scale, on a table of
 /// apparent stiffness [`TableStiffness`]. With the identified servovalve `valve`, the
 /// force is fitted against the valve command through it (H1 of a noise-free input: at
@@ -195,16 +203,23 @@ pub fn fit_oil_column(
     rec: &Record,
     fs: f64,
     geometry: &OilGeometry,
-    mass_kg: f64,
+    mass: ColumnMass,
     valve: Option<&ValveTf>,
 ) -> Result<OilColumnFit, IdentifyError> {
+    let mass_kg = mass.mass_kg;
     let ch = OilColumnChannels::read(name, rec, fs, mass_kg)?;
     let w = welch_for(fs, rec.len()).map_err(|e| IdentifyError::failed(name, e))?;
     let failed = |e| IdentifyError::failed(name, e);
     let iv = w
         .frf_instrumental(ch.command, ch.spool, ch.force)
         .map_err(failed)?;
-    let own = fit_mass(name, rec, fs)?;
+    // this test's own mass read as the identified mass was: a table carrying modes, or
+    // a rigid body (the two tests' masses offset the measured apparent mass)
+    let own = if mass.carrying_modes {
+        fit_mass(name, rec, fs)?
+    } else {
+        fit_rigid_mass(name, rec, fs)?
+    };
     let apparent = w
         .frf_instrumental(&rec.ref_acceleration_m_s2, ch.acceleration, ch.force)
         .map_err(failed)?;
