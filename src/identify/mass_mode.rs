@@ -279,35 +279,12 @@ pub fn fit_table_with_modes(
     if !(lo > 0.0 && hi > lowest_mode_hz) {
         return None;
     }
-    let frequencies = log_grid(lowest_mode_hz, ABOVE_BAND * hi, POINTS_PER_DECADE);
-    let dampings = log_grid(DAMPING_GRID[0], DAMPING_GRID[1], POINTS_PER_DECADE / 4.0);
-    // fits with 0, 1, .. modes, each new one placed with the earlier held, then all zoomed
-    let mut fits = vec![all.fit(&[])?];
-    while fits.len() <= MAX_MODES {
-        let last = &fits[fits.len() - 1];
-        if last.rms < RESIDUAL_FLOOR * last.total_kg() {
-            break;
-        }
-        let mut modes = last.modes.clone();
-        let apart: Vec<f64> = frequencies
-            .iter()
-            .copied()
-            .filter(|f| {
-                modes.iter().all(|m| {
-                    (f / m.0).ln().abs() >= MODE_SEPARATION.ln() && (f - m.0).abs() > smeared
-                })
-            })
-            .collect();
-        modes.push((frequencies[0], dampings[0]));
-        let Some(more) = all.best_moving(&modes, modes.len() - 1, &apart, &dampings) else {
-            break;
-        };
-        let more = all.zoomed(more, None);
-        if !more.carries_its_share() {
-            break;
-        }
-        fits.push(more);
-    }
+    let grid = Grid {
+        frequencies: log_grid(lowest_mode_hz, ABOVE_BAND * hi, POINTS_PER_DECADE),
+        dampings: log_grid(DAMPING_GRID[0], DAMPING_GRID[1], POINTS_PER_DECADE / 4.0),
+        smeared_hz: smeared,
+    };
+    let mut fits = fits_by_mode_count(&all, &grid)?;
     // the most modes of which the last pays for itself, and all of them together too (a
     // light mode's fit may not halve the misfit that a heavy one beside it leaves)
     let n = (1..fits.len())
@@ -318,24 +295,73 @@ pub fn fit_table_with_modes(
         return None;
     }
     let fit = clear_of_peaks(&all, fit);
-    // a mode the repeat left below its share goes, the others refitted where they are and
-    // repeated clear of their peaks
     let fit = if fit.carries_its_share() {
         fit
     } else {
-        let share = MIN_MODE_SHARE * fit.total_kg();
-        let kept: Vec<(f64, f64)> = (0..fit.modes.len())
-            .filter(|&j| fit.x[1 + j] >= share)
-            .map(|j| fit.modes[j])
-            .collect();
-        let pruned = all
-            .fit(&kept)
-            .filter(|f| !kept.is_empty() && f.physical())?;
-        Some(clear_of_peaks(&all, pruned.clone()))
-            .filter(Fit::carries_its_share)
-            .unwrap_or(pruned)
+        without_light_modes(&all, &fit)?
     };
     Some(table_with_modes(&all, &fit))
+}
+
+/// Where a mode may be placed: frequencies and damping ratios, and the smeared width
+/// about a mode that another keeps out of, Hz.
+struct Grid {
+    frequencies: Vec<f64>,
+    dampings: Vec<f64>,
+    smeared_hz: f64,
+}
+
+/// The fits with 0, 1, .. [`MAX_MODES`] modes, each new one placed on `grid` with the
+/// earlier held and apart from them ([`MODE_SEPARATION`]), then all zoomed; the count stops
+/// at the residual floor or at a mode below its share. `None` when not even the rigid fit
+/// solves.
+fn fits_by_mode_count(all: &Data, grid: &Grid) -> Option<Vec<Fit>> {
+    let mut fits = vec![all.fit(&[])?];
+    while fits.len() <= MAX_MODES {
+        let last = &fits[fits.len() - 1];
+        if last.rms < RESIDUAL_FLOOR * last.total_kg() {
+            break;
+        }
+        let mut modes = last.modes.clone();
+        let apart: Vec<f64> = grid
+            .frequencies
+            .iter()
+            .copied()
+            .filter(|f| {
+                modes.iter().all(|m| {
+                    (f / m.0).ln().abs() >= MODE_SEPARATION.ln()
+                        && (f - m.0).abs() > grid.smeared_hz
+                })
+            })
+            .collect();
+        modes.push((grid.frequencies[0], grid.dampings[0]));
+        let Some(more) = all.best_moving(&modes, modes.len() - 1, &apart, &grid.dampings) else {
+            break;
+        };
+        let more = all.zoomed(more, None);
+        if !more.carries_its_share() {
+            break;
+        }
+        fits.push(more);
+    }
+    Some(fits)
+}
+
+/// `fit` without the modes the repeat clear of the peaks left below their share, the others
+/// refitted where they are and repeated clear of their peaks (kept as refitted when that
+/// repeat leaves one below its share again); `None` when no mode is left.
+fn without_light_modes(all: &Data, fit: &Fit) -> Option<Fit> {
+    let share = MIN_MODE_SHARE * fit.total_kg();
+    let kept: Vec<(f64, f64)> = (0..fit.modes.len())
+        .filter(|&j| fit.x[1 + j] >= share)
+        .map(|j| fit.modes[j])
+        .collect();
+    let pruned = all
+        .fit(&kept)
+        .filter(|f| !kept.is_empty() && f.physical())?;
+    Some(clear_of_peaks(all, pruned.clone()))
+        .filter(Fit::carries_its_share)
+        .or(Some(pruned))
 }
 
 /// `fit` repeated over the bins of `all` clear of its modes' smeared peaks, each mode's
