@@ -75,13 +75,6 @@ fn fit_mass_as(
     let carried = (modes == Modes::WhenNotRigid && rigid.misfit > RIGID_MISFIT_LIMIT)
         .then(|| fit_table_with_modes(&e.frequency_hz, &e.h1, &idx))
         .flatten();
-    eprintln!(
-        "DBG {name} misfit {:.3} carried {:?}",
-        rigid.misfit,
-        carried
-            .as_ref()
-            .map(|t| (t.table_kg, t.modes.clone(), t.total_kg()))
-    );
     let low = e.band(1.0, 5.0);
     let fit = MassFit {
         test: name.to_string(),
