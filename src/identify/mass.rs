@@ -1,6 +1,6 @@
 //! The rigid mass from a random test's apparent mass F/a (paper 4.1.2, eq. 4.4); when F/a
-//! is not a rigid body's ([`RIGID_MISFIT_LIMIT`]), the mass that moves below the mode of a
-//! table carrying one ([`super::mass_mode`]).
+//! is not a rigid body's ([`RIGID_MISFIT_LIMIT`]), the mass that moves below the modes of a
+//! table carrying them ([`super::mass_mode`]).
 
 use super::error::IdentifyError;
 use super::frf::FrfEstimate;
@@ -47,6 +47,8 @@ enum Modes {
     Never,
 }
 
+/// The apparent-mass fit of the record, the force less `friction` when given; a table
+/// carrying modes when `modes` allows and the rigid fit misses.
 fn fit_mass_as(
     name: &str,
     rec: &Record,
