@@ -232,12 +232,11 @@ impl Data<'_> {
     }
 }
 
-/// Logarithmic grid from `lo` to `hi` at `per_decade` points a decade.
+/// Logarithmic grid from `lo` to `hi` at `per_decade` points a decade
+/// ([`crate::linear::log_grid`] with the count that density gives).
 fn log_grid(lo: f64, hi: f64, per_decade: f64) -> Vec<f64> {
-    let n = ((hi / lo).log10() * per_decade).ceil().max(1.0) as usize;
-    (0..=n)
-        .map(|j| lo * (hi / lo).powf(j as f64 / n as f64))
-        .collect()
+    let steps = ((hi / lo).log10() * per_decade).ceil().max(1.0) as usize;
+    crate::linear::log_grid(lo, hi, steps + 1)
 }
 
 /// The global grids' log steps of frequency and damping ratio.
