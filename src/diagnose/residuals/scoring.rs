@@ -5,11 +5,13 @@ use super::cell::{Cell, Cells};
 use super::channels::Channel;
 use super::noise::NoiseFloor;
 use super::prediction::{predict_draws, Prediction, HELDOUT_REALISATIONS, REALISATIONS};
+use super::run::{readings, simulate_test};
 use super::spectral::{band_split, octave_bands};
 use super::whitening::white_variance;
 use super::Part;
 use crate::campaign::{Campaign, Record};
 use crate::params::Params;
+use crate::Outputs;
 
 /// Window of the predictive score, samples (0.25 s at 512 Hz: short beside a chatter
 /// burst's growth, long enough for a power estimate within about 12 %).
@@ -339,12 +341,7 @@ pub fn test_scores_of_parts(
         .zip(hold)
         .map(|(&part, &held)| {
             let range = part.range(c.records[i].len());
-            // a run that stopped inside the part has left the envelope there
-            let left = !range.is_empty()
-                && pred
-                    .locked_over(range.clone())
-                    .is_none_or(|locked| crate::model::limits::first_exceeded(p, locked).is_some())
-                && !measured_beyond_envelope(p, &c.records[i], range);
+            let left = left_envelope(p, c, i, pred.locked_over(range.clone()), range);
             if held && left {
                 let inf = CellScores {
                     score: Cells::filled(Cell::Diverged),
@@ -356,6 +353,32 @@ pub fn test_scores_of_parts(
             (scores(c, i, &pred, noise, part), left)
         })
         .collect()
+}
+
+/// Whether a model's noise-free readings `locked` of test `i` over `range` leave the
+/// envelope where the measured table does not ([`measured_beyond_envelope`]); a run that
+/// stopped inside `range` (`locked` None) has left it there.
+fn left_envelope(
+    p: &Params,
+    c: &Campaign,
+    i: usize,
+    locked: Option<&[Outputs]>,
+    range: std::ops::Range<usize>,
+) -> bool {
+    !range.is_empty()
+        && locked.is_none_or(|locked| crate::model::limits::first_exceeded(p, locked).is_some())
+        && !measured_beyond_envelope(p, &c.records[i], range)
+}
+
+/// Whether `p`'s noise-free whole runs of `tests` stay inside the envelope wherever the
+/// measured table does ([`left_envelope`] over each whole record).
+pub fn stays_inside(p: &Params, c: &Campaign, tests: &[usize]) -> bool {
+    use rayon::prelude::*;
+    tests.par_iter().all(|&i| {
+        let run = simulate_test(p, c, i, Part::Whole);
+        let range = Part::Whole.range(c.records[i].len());
+        !left_envelope(p, c, i, readings(&run).get(range.clone()), range)
+    })
 }
 
 /// Whether the measured table itself left the envelope over `range`, as far as its
