@@ -9,8 +9,9 @@ use super::effect::Effect;
 use super::effect_values::EffectValues;
 use super::free_play_start::free_play_start;
 use super::starts::{
-    asymmetry_grid, deadband_grid, flow_limit_start, foundation_start, foundation_starts,
-    higher_mode_starts, one_value, specimen_starts, stick_slip_grid, ROD_MASS_FRACTION,
+    asymmetry_grid, carried_mode_start, deadband_grid, flow_limit_start, foundation_start,
+    foundation_starts, higher_mode_starts, one_value, specimen_starts, stick_slip_grid,
+    ROD_MASS_FRACTION,
 };
 use crate::campaign::Campaign;
 use crate::effects;
@@ -155,7 +156,7 @@ pub(super) static TABLE: [Row; 10] = [
         specimen_modes: Some(2),
         fit: FitKind::OutputError,
         starts: |s| higher_mode_starts(s.effect, s.c, s.base),
-        informed: None,
+        informed: Some(|s| carried_mode_start(s.effect, s.c, s.base)),
         valley_frequency: Some("mode2.frequency_hz"),
         takes_out: TakesOut::NewestModeMass,
     },
@@ -164,7 +165,7 @@ pub(super) static TABLE: [Row; 10] = [
         specimen_modes: Some(3),
         fit: FitKind::OutputError,
         starts: |s| higher_mode_starts(s.effect, s.c, s.base),
-        informed: None,
+        informed: Some(|s| carried_mode_start(s.effect, s.c, s.base)),
         valley_frequency: Some("mode3.frequency_hz"),
         takes_out: TakesOut::NewestModeMass,
     },
