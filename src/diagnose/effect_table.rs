@@ -8,10 +8,10 @@ use super::direction_starts::{flow_ratio_start, friction_ratio_start};
 use super::effect::Effect;
 use super::effect_values::EffectValues;
 use super::free_play_start::free_play_start;
+use super::mode_starts::{carried_mode_start, higher_mode_starts, specimen_starts};
 use super::starts::{
-    asymmetry_grid, carried_mode_start, deadband_grid, flow_limit_start, foundation_start,
-    foundation_starts, higher_mode_starts, one_value, specimen_starts, stick_slip_grid,
-    ROD_MASS_FRACTION,
+    asymmetry_grid, deadband_grid, flow_limit_start, foundation_start, foundation_starts,
+    one_value, stick_slip_grid, ROD_MASS_FRACTION,
 };
 use crate::campaign::Campaign;
 use crate::effects;

@@ -58,6 +58,7 @@ mod free_play_start;
 pub mod kinematics;
 mod locate;
 mod missed;
+mod mode_starts;
 pub mod model_error;
 mod output;
 mod part;
