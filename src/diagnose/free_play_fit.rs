@@ -68,6 +68,9 @@ const IMPROVEMENT: f64 = 0.8;
 const EFFECT_LEN: usize = 2;
 /// The gap's place in the point (the catalogue declares it first).
 const GAP_AT: usize = 0;
+/// The oil column's and the leakage's places in the point ([`POLISHED`]'s first two).
+const COLUMN_AT: usize = EFFECT_LEN;
+const LEAKAGE_AT: usize = EFFECT_LEN + 1;
 
 /// Free play on the predictive score (see [`residuals`]): the table bounces inside the
 /// gap after each crossing, chaotically, so the sample-wise residual is rough at the
@@ -247,9 +250,10 @@ impl<'a> PlayFit<'a> {
 
     /// The best base, in either actuator variant, with its oil column stiffened by
     /// [`OIL_COLUMN_FACTORS`] and its leakage cut by [`LEAKAGE_FACTORS`]: its point, the
-    /// base and the score; `None` when no start scores finite. Both variants, because the play's impacts bend the baseline's choice
-    /// of variant: seed 16's baseline took the nonlinear actuator, on which the truth's
-    /// play scores 43 times worse than on the ideal one the truth has.
+    /// base and the score; `None` when no start scores finite. Both variants, because the
+    /// play's impacts bend the baseline's choice of variant: seed 16's baseline took the
+    /// nonlinear actuator, on which the truth's play scores 43 times worse than on the
+    /// ideal one the truth has.
     fn best_start(
         &self,
         bases: &[Params],
@@ -267,8 +271,8 @@ impl<'a> PlayFit<'a> {
             .map(|(b, f, l)| {
                 let mut x: Vec<f64> = start.layout().to_vec();
                 x.extend(POLISHED.iter().map(|w| w.get(&b)));
-                x[EFFECT_LEN] = (x[EFFECT_LEN] * f).min(self.ranges[0].upper);
-                x[EFFECT_LEN + 1] *= l;
+                x[COLUMN_AT] = (x[COLUMN_AT] * f).min(self.ranges[0].upper);
+                x[LEAKAGE_AT] *= l;
                 let s = self.score(&b, &x);
                 (x, b, s)
             })
@@ -359,11 +363,20 @@ fn nelder_mead(score: &dyn Fn(&[f64]) -> f64, x0: &[f64], first: f64) -> Option<
 mod tests {
     use super::*;
 
-    /// The point's layout is the catalogue's: the gap first, then the rod's mass.
+    /// The point's layout is the catalogue's: the gap first, then the rod's mass; then the
+    /// oil column and the leakage.
     #[test]
     fn the_point_leads_with_the_effects_values() {
         let keys = Effect::of(&crate::effects::free_play::EFFECT).parameters();
         assert_eq!(keys.len(), EFFECT_LEN);
         assert_eq!(keys[GAP_AT], "gap_m");
+        assert_eq!(
+            POLISHED[COLUMN_AT - EFFECT_LEN],
+            BaselineParameter::BulkModulus
+        );
+        assert_eq!(
+            POLISHED[LEAKAGE_AT - EFFECT_LEN],
+            BaselineParameter::Leakage
+        );
     }
 }
