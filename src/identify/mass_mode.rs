@@ -265,16 +265,6 @@ pub fn fit_table_with_modes(
     apparent: &[Complex64],
     bins: &[usize],
 ) -> Option<TableWithModes> {
-    fit_table_with_up_to(frequency_hz, apparent, bins, MAX_MODES)
-}
-
-/// [`fit_table_with_modes`] with up to `max_modes` modes.
-fn fit_table_with_up_to(
-    frequency_hz: &[f64],
-    apparent: &[Complex64],
-    bins: &[usize],
-    max_modes: usize,
-) -> Option<TableWithModes> {
     let all = Data {
         frequency_hz,
         apparent,
@@ -296,7 +286,6 @@ fn fit_table_with_up_to(
         frequencies: log_grid(lowest_mode_hz, ABOVE_BAND * hi, POINTS_PER_DECADE),
         dampings: log_grid(DAMPING_GRID[0], DAMPING_GRID[1], POINTS_PER_DECADE / 4.0),
         smeared_hz: smeared,
-        max_modes,
     };
     let mut fits = fits_by_mode_count(&all, &grid)?;
     // the most modes of which the last pays for itself, and all of them together too (a
@@ -323,7 +312,6 @@ struct Grid {
     frequencies: Vec<f64>,
     dampings: Vec<f64>,
     smeared_hz: f64,
-    max_modes: usize,
 }
 
 /// The fits with 0, 1, .. [`MAX_MODES`] modes, each new one placed on `grid` with the
@@ -332,7 +320,7 @@ struct Grid {
 /// solves.
 fn fits_by_mode_count(all: &Data, grid: &Grid) -> Option<Vec<Fit>> {
     let mut fits = vec![all.fit(&[])?];
-    while fits.len() <= grid.max_modes {
+    while fits.len() <= MAX_MODES {
         let last = &fits[fits.len() - 1];
         if last.rms < RESIDUAL_FLOOR * last.total_kg() {
             break;
@@ -487,8 +475,7 @@ mod tests {
         ] {
             let (truth, f, apparent) = exact(modes);
             let bins: Vec<usize> = (0..f.len()).collect();
-            let n = truth.modes.len();
-            let fit = fit_table_with_up_to(&f, &apparent, &bins, n + 1).unwrap();
+            let fit = fit_table_with_modes(&f, &apparent, &bins).unwrap();
             assert_eq!(fit.modes.len(), truth.modes.len(), "{fit:?}");
             assert!(
                 (fit.table_kg / truth.table_kg - 1.0).abs() < 5e-3,
