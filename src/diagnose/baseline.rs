@@ -5,7 +5,7 @@
 use super::part::Part;
 use super::residuals::{simulate_test, Whitening};
 use crate::campaign::Campaign;
-use crate::params::{Params, ServovalveModel};
+use crate::params::{ActuatorModel, Params, ServovalveModel};
 use rayon::prelude::*;
 
 /// The band-normalised residual of `p` on the fitting halves of `tests` for least squares
@@ -315,6 +315,13 @@ fn range_within(p: &Params, which: BaselineParameter, width: f64) -> Range {
         r.scale = 0.5;
     }
     r
+}
+
+/// `base` with the actuator variant `model` (the baseline's structure, section 4.2).
+pub(super) fn with_actuator(base: &Params, model: ActuatorModel) -> Params {
+    let mut p = *base;
+    p.actuator.model = model;
+    p
 }
 
 /// Range of a baseline parameter in the candidates' fits: wide (half to twice the value),

@@ -2,7 +2,7 @@
 //! polished on the predictive score (its impacts have no reproducible phase).
 
 use super::baseline::{
-    candidate_range, mass_is_scale, refine_output_error, BaselineParameter, Range,
+    candidate_range, mass_is_scale, refine_output_error, with_actuator, BaselineParameter, Range,
 };
 use super::candidates::{FitContext, ScoreFit};
 use super::effect::Effect;
@@ -126,13 +126,6 @@ pub(super) fn fit_free_play(
         values: effect_of(&best.1),
         params: fit.model(&base, &best.1),
     })
-}
-
-/// `base` with the actuator variant `model`.
-fn with_actuator(base: &Params, model: ActuatorModel) -> Params {
-    let mut p = *base;
-    p.actuator.model = model;
-    p
 }
 
 /// A score and the point it was taken at.

@@ -7,7 +7,7 @@
 //! modes). Elsewhere: the searches' loop and the result ([`rounds`]), polishing
 //! ([`polish`]), the selection rules ([`select`]), the backward step ([`prune`]).
 
-use super::baseline::{from_motion, refine_output_error};
+use super::baseline::{from_motion, refine_output_error, with_actuator};
 use super::candidates::{fit_candidate, FitContext, Hold};
 use super::effect::Effect;
 use super::effort::Effort;
@@ -105,14 +105,9 @@ impl Diagnoser<'_> {
     /// Step 1: the baseline refined with both actuator variants; the better fit is the
     /// baseline's structure. Returns it and the two costs (ideal, nonlinear).
     fn refine_both_variants(&self, base: Params) -> (Params, [f64; 2]) {
-        let variant = |model: ActuatorModel| {
-            let mut p = base;
-            p.actuator.model = model;
-            p
-        };
         let (ideal, nonlinear) = rayon::join(
-            || self.refine(&variant(ActuatorModel::Ideal)),
-            || self.refine(&variant(ActuatorModel::Nonlinear)),
+            || self.refine(&with_actuator(&base, ActuatorModel::Ideal)),
+            || self.refine(&with_actuator(&base, ActuatorModel::Nonlinear)),
         );
         let costs = [ideal.0, nonlinear.0];
         let best = if nonlinear.0 < ideal.0 {

@@ -4,7 +4,7 @@
 //! accepted cause settled before a further search ([`Diagnoser::settle`]).
 
 use super::Diagnoser;
-use crate::diagnose::baseline::{refine_output_error, FreedFit, Refined};
+use crate::diagnose::baseline::{refine_output_error, with_actuator, FreedFit, Refined};
 use crate::diagnose::candidates::{polish_on_score, scored_candidate, Fitted, Hold};
 use crate::diagnose::effect::Effect;
 use crate::diagnose::effect_values::{EffectBounds, EffectValues};
@@ -103,8 +103,7 @@ impl Diagnoser<'_> {
             .map(|n| (n, from.parameters[n]))
             .collect();
         let own = EffectValues::new(from.effect, &pairs);
-        let mut p0 = from.params;
-        p0.actuator.model = model;
+        let p0 = with_actuator(&from.params, model);
         let accepted = accepted_before(from, &p0);
         let effects: Vec<EffectValues> = std::iter::once(own)
             .chain(accepted.iter().cloned())
