@@ -136,3 +136,52 @@ fn oil_column_of_tables_far_from_14_hz() {
     check_oil_column_at(&light(15_000.0, beta), 5, 1.0, &FAR, "15 t, 23.5 Hz");
     check_oil_column_at(&light(6000.0, 2.5e9), 5, 1.0, &FAR, "6 t, 53.8 Hz");
 }
+
+/// A 6-t table carrying a specimen whose mode lies at or below the mass band's 2-Hz edge
+/// (3 t at 2.2 Hz, 3 t at 1.8 Hz; 30-s random tests, default noise): the table carrying
+/// the mode is read from 1 Hz, and the oil column behind it keeps its stiffness. Before,
+/// no carried fit placed the mode, the mass taken was the sines' 9.1 t and the oil column,
+/// read behind the rigid compromise of the oil-column test's own apparent mass (5.6 t),
+/// came out 58 % stiff. Tolerances: the bulk modulus within 4 % (measured -0.7 and
+/// -1.2 %; -0.3 to -1.6 % on six such specimens at 1.8-2.7 Hz), the mass taken, table and
+/// specimen, within 3 % (measured +1.2 and +1.9 %), the mode within 15 % (a mode at the
+/// edge is seen on one side more than the other: measured -0.1 and -8.7 %; the diagnosis
+/// refits it).
+#[test]
+fn oil_column_behind_a_mode_at_the_mass_bands_edge() {
+    for (seed, mode_hz) in [(5704, 2.2), (3, 1.8)] {
+        let mut truth = Params::trees_lab();
+        truth.table.mass_kg = 6000.0;
+        let spec = format!("specimen:mass_kg=3000,frequency_hz={mode_hz},damping_ratio=0.03");
+        truth.apply_effect_spec(&spec).unwrap();
+        let opts = SynthOptions {
+            seed,
+            random_duration_s: 30.0,
+            ..SynthOptions::default()
+        };
+        let id = identify_screened(&screen(&synthesise(&truth, &opts, None)));
+        let what = format!("seed {seed}, 3 t at {mode_hz} Hz");
+        let carried = (id.mass_random.as_ref())
+            .and_then(|m| m.carried.as_ref())
+            .unwrap_or_else(|| panic!("{what}: no table carrying modes"));
+        assert_eq!(carried.modes.len(), 1, "{what}: {carried:?}");
+        assert!(
+            carried.band_hz[0] < 2.0,
+            "{what}: read from {:?}",
+            carried.band_hz
+        );
+        let mode_err = carried.modes[0].frequency_hz / mode_hz - 1.0;
+        assert!(mode_err.abs() < 0.15, "{what}: {carried:?}");
+        let mass_kg = id.mass_kg.unwrap();
+        assert!(
+            (mass_kg / 9000.0 - 1.0).abs() < 0.03,
+            "{what}: mass {mass_kg}"
+        );
+        let bulk = id.params.actuator.bulk_modulus_pa / truth.actuator.bulk_modulus_pa - 1.0;
+        assert!(
+            bulk.abs() < 0.04,
+            "{what}: bulk modulus {:+.1} %",
+            100.0 * bulk
+        );
+    }
+}

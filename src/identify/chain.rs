@@ -22,7 +22,7 @@ pub fn identify_screened_with(s: &Screening, scope: Scope) -> Identification {
     let mechanics = chain.mechanics();
     let column_mass = mechanics.mass_kg.map(|mass_kg| ColumnMass {
         mass_kg,
-        carrying_modes: (mechanics.mass_random.as_ref()).is_some_and(|m| m.carried.is_some()),
+        carried: (mechanics.mass_random.as_ref()).and_then(|m| m.carried.clone()),
     });
     let oil_column = chain.oil_column(servovalve.is_some(), column_mass);
     let validation = chain.validation();

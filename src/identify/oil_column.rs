@@ -3,7 +3,8 @@
 use super::error::IdentifyError;
 use super::frf::{CrossSpectra, FrfEstimate};
 use super::lsq::{minimise, LsqOptions};
-use super::mass::{fit_mass, fit_rigid_mass};
+use super::mass::{fit_rigid_mass, table_above_modes};
+use super::mass_mode::TableWithModes;
 use super::results::{FrfData, OilColumnFit};
 use super::signals::{channel, spool_channel, welch_for};
 use super::{
@@ -182,12 +183,31 @@ fn fit_stiffness_and_leakage(
     }
 }
 
+/// The oil-column test's own mass for [`TableStiffness`] when the identified `mass_kg` is a
+/// table carrying modes: the mass offset by the two tests' readings of the table above the
+/// modes, both under the mass test's modes ([`table_above_modes`]; the oil-column test's
+/// own search may weigh them wrong or not place them); `mass_kg` itself, no offset, when
+/// either reading fails.
+fn own_mass_carrying(
+    name: &str,
+    rec: &Record,
+    fs: f64,
+    mass_kg: f64,
+    carried: &TableWithModes,
+) -> Result<f64, IdentifyError> {
+    let own_table_kg = table_above_modes(name, rec, fs, carried)?;
+    Ok(match (own_table_kg, carried.table_above_modes_kg) {
+        (Some(own), Some(mass_test)) => mass_kg + own - mass_test,
+        _ => mass_kg,
+    })
+}
+
 /// The identified mass the oil column is fitted behind.
-#[derive(Debug, Clone, Copy)]
+#[derive(Debug, Clone)]
 pub struct ColumnMass {
     pub mass_kg: f64,
-    /// Whether it is the mass of a table carrying modes ([`super::MassFit::carried`]).
-    pub carrying_modes: bool,
+    /// The table carrying modes it is the mass of ([`super::MassFit::carried`]).
+    pub carried: Option<TableWithModes>,
 }
 
 /// Oil column from R3 (4.1.3) for `k_oil`, `C_l` and a flow-gain scale, on a table of
@@ -215,10 +235,9 @@ pub fn fit_oil_column(
         .map_err(failed)?;
     // this test's own mass read as the identified mass was: a table carrying modes, or
     // a rigid body (the two tests' masses offset the measured apparent mass)
-    let own = if mass.carrying_modes {
-        fit_mass(name, rec, fs)?
-    } else {
-        fit_rigid_mass(name, rec, fs)?
+    let own_mass_kg = match &mass.carried {
+        Some(carried) => own_mass_carrying(name, rec, fs, mass_kg, carried)?,
+        None => fit_rigid_mass(name, rec, fs)?.mass_kg,
     };
     let apparent = w
         .frf_instrumental(&rec.ref_acceleration_m_s2, ch.acceleration, ch.force)
@@ -226,7 +245,7 @@ pub fn fit_oil_column(
     let table = TableStiffness {
         apparent_kg: apparent.h1,
         mass_kg,
-        own_mass_kg: own.mass_kg,
+        own_mass_kg,
     };
     let (input, fit) = match valve {
         Some(v) => (
