@@ -81,7 +81,7 @@ pub(super) static TABLE: [Row; 10] = [
         catalogue: &effects::specimen::EFFECT,
         specimen_modes: Some(1),
         fit: FitKind::OutputError,
-        starts: |s| specimen_starts(s.c, s.base.table.mass_kg),
+        starts: |s| specimen_starts(s.c, s.base),
         informed: None,
         valley_frequency: Some("frequency_hz"),
         takes_out: TakesOut::NewestModeMass,

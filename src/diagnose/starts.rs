@@ -6,7 +6,8 @@ use super::effect_table::StartsFrom;
 use super::effect_values::EffectValues;
 use super::specimen_modes::apart;
 use crate::campaign::{Campaign, TestKind};
-use crate::identify::frf::{Welch, WelchOptions};
+use crate::identify;
+use crate::identify::frf::{FrfEstimate, Welch, WelchOptions};
 use crate::identify::select::random_roles;
 use crate::params::Params;
 use num_complex::Complex64;
@@ -75,12 +76,38 @@ pub(super) fn apparent_mass(c: &Campaign) -> Option<(Vec<f64>, Vec<Complex64>)> 
             r.force_n.as_deref()?,
         )
         .ok()?;
+    Some(in_band(&e))
+}
+
+/// [`apparent_mass`] with `base`'s friction and table stiffness taken out of the force
+/// along the measured path, as identify's mass fit reads it
+/// ([`identify::apparent_mass_less_friction`], at identify's resolution, the same 0.25 Hz):
+/// what a table carrying modes is fitted to.
+pub(super) fn apparent_mass_less_friction(
+    c: &Campaign,
+    base: &Params,
+) -> Option<(Vec<f64>, Vec<Complex64>)> {
+    let roles = random_roles(c);
+    let i = roles.mass.or(roles.oil_column)?;
+    let e = identify::apparent_mass_less_friction(
+        &c.info.tests[i].name,
+        &c.records[i],
+        c.sample_rate_of(i),
+        &base.friction,
+        base.table.stiffness_n_m,
+    )
+    .ok()?;
+    Some(in_band(&e))
+}
+
+/// The bins of `e` in [`grid::APPARENT_MASS_BAND_HZ`]: frequencies and `F/a`.
+fn in_band(e: &FrfEstimate) -> (Vec<f64>, Vec<Complex64>) {
     let [lo, hi] = grid::APPARENT_MASS_BAND_HZ;
     let idx = e.band(lo, hi);
-    Some((
+    (
         idx.iter().map(|&i| e.frequency_hz[i]).collect(),
         idx.iter().map(|&i| e.h1[i]).collect(),
-    ))
+    )
 }
 
 /// Starting points of a candidate's effect parameters (physically informed): its row's

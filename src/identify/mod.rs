@@ -41,7 +41,7 @@ pub use error::IdentifyError;
 pub use estimates::{Estimate, Quantity};
 pub use friction::{bouc_wen_path, fit_friction, fit_triangles};
 pub(crate) use mass::carried_modes_text;
-pub use mass::{fit_mass, fit_mass_corrected};
+pub use mass::{apparent_mass_less_friction, fit_mass, fit_mass_corrected};
 pub use mass_mode::{fit_table_with_modes, CarriedMode, TableWithModes};
 pub use missing::{Estimation, Missing};
 pub use oil_column::{fit_oil_column, ColumnMass, OilColumnInput, OilGeometry};
