@@ -221,6 +221,17 @@ mod tests {
     use super::*;
     use crate::campaign::synth::{synthesise, SynthOptions};
 
+    /// The mass test R2 of `p` alone (30 s of random motion) at `seed`.
+    fn mass_test(p: &Params, seed: u64) -> Campaign {
+        let opts = SynthOptions {
+            tests: Some(vec!["R2".to_string()]),
+            random_duration_s: 30.0,
+            seed,
+            ..Default::default()
+        };
+        synthesise(p, &opts, None)
+    }
+
     /// On a two-mode specimen with mode 1 fitted a few percent off (as a one-mode fit
     /// leaves it), one of the second mode's starts is read at its frequency (within the
     /// apparent mass's 0.25-Hz lines and the peak's shift by mode 1), on four draws; the
@@ -241,13 +252,7 @@ mod tests {
                  mode2.mass_kg=5000,mode2.frequency_hz={f2},mode2.damping_ratio=0.01"
             ))
             .unwrap();
-            let opts = SynthOptions {
-                tests: Some(vec!["R2".to_string()]),
-                random_duration_s: 30.0,
-                seed,
-                ..Default::default()
-            };
-            let c = synthesise(&p, &opts, None);
+            let c = mass_test(&p, seed);
             let mut base = Params::trees_lab();
             base.apply_effect_spec(&format!(
                 "specimen:mass_kg=16500,frequency_hz={fitted_f1},damping_ratio=0.025"
@@ -315,13 +320,7 @@ mod tests {
             p.table.mass_kg = 6000.0;
             p.apply_effect_spec("specimen:mass_kg=1500,frequency_hz=2.4,damping_ratio=0.02")
                 .unwrap();
-            let opts = SynthOptions {
-                tests: Some(vec!["R2".to_string()]),
-                random_duration_s: 30.0,
-                seed,
-                ..Default::default()
-            };
-            let c = synthesise(&p, &opts, None);
+            let c = mass_test(&p, seed);
             let mut base = Params::trees_lab();
             base.table.mass_kg = 7500.0;
             let starts = specimen_starts(&c, &base);

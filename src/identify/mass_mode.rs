@@ -538,16 +538,21 @@ mod tests {
         }
     }
 
+    /// One mode (33 t at 4.43 Hz) and two (the heavier low, as a building's first mode).
+    fn one_and_two_modes() -> [Vec<CarriedMode>; 2] {
+        [
+            vec![mode(33_000.0, 4.43, 0.055)],
+            vec![mode(38_000.0, 3.97, 0.048), mode(11_000.0, 10.3, 0.048)],
+        ]
+    }
+
     /// Exact apparent masses of 15 t carrying one mode (33 t at 4.43 Hz) and two (the
     /// heavier low, as a building's first mode) with friction-like terms are fitted back:
     /// masses within 0.5 %, frequencies within 0.2 %, damping within 5 %, and no more
     /// modes than there are.
     #[test]
     fn exact_carried_modes_are_fitted_back() {
-        for modes in [
-            vec![mode(33_000.0, 4.43, 0.055)],
-            vec![mode(38_000.0, 3.97, 0.048), mode(11_000.0, 10.3, 0.048)],
-        ] {
+        for modes in one_and_two_modes() {
             let (truth, f, apparent) = exact(modes);
             let bins: Vec<usize> = (0..f.len()).collect();
             let fit = fit_table_with_modes(&f, &apparent, &bins).unwrap();
@@ -577,10 +582,7 @@ mod tests {
     /// the table's within the fit's 0.5 %.
     #[test]
     fn two_tests_read_the_table_alike_under_held_modes() {
-        for modes in [
-            vec![mode(33_000.0, 4.43, 0.055)],
-            vec![mode(38_000.0, 3.97, 0.048), mode(11_000.0, 10.3, 0.048)],
-        ] {
+        for modes in one_and_two_modes() {
             let (truth, f, apparent) = exact(modes);
             let heavier: Vec<Complex64> = apparent.iter().map(|a| a + 300.0).collect();
             let held: Vec<CarriedMode> = (truth.modes.iter())
