@@ -194,18 +194,25 @@ fn worst_true_cell(p: &Params, c: &shaketable::campaign::Campaign, draws: usize)
 /// with the held-out quarters' noise draws (`HELDOUT_REALISATIONS`): one draw misjudges
 /// the power of noise-driven bursts (the fastest sine's low bands, chatter), and on full
 /// campaigns left the truth's worst cell at 2.52 and 2.76 (stop 49). Campaigns of several
-/// effects and seeds; the one-draw figure is printed beside.
+/// effects and seeds; the one-draw figure is printed beside. The chaotic ones too: a free
+/// play's impacts (seed 16, 0.54 mm: worst cell 1.46) and stick-slip chatter on a 6-t
+/// table at its 37-Hz oil column (seed 22: 1.50), whose fitted models the diagnosis
+/// leaves `explained: false` (stop 55): their misses are the fit's, not the rule's.
 #[test]
 fn the_true_model_explains_every_heldout_cell() {
     use shaketable::diagnose::residuals::HELDOUT_REALISATIONS;
+    let trees = Params::trees_lab().table.mass_kg;
     let cases = [
-        (451, ""),
-        (458, "flow_asymmetry:ratio=1.25"),
-        (454, "stick_slip:static_ratio=2.5"),
-        (452, "specimen:mass_kg=15000,frequency_hz=4.5"),
+        (451, trees, ""),
+        (458, trees, "flow_asymmetry:ratio=1.25"),
+        (454, trees, "stick_slip:static_ratio=2.5"),
+        (452, trees, "specimen:mass_kg=15000,frequency_hz=4.5"),
+        (16, trees, "free_play:gap_m=0.00054"),
+        (22, 6000.0, "stick_slip:static_ratio=2.5"),
     ];
-    for (seed, effect) in cases {
+    for (seed, table_kg, effect) in cases {
         let mut p = Params::trees_lab();
+        p.table.mass_kg = table_kg;
         if !effect.is_empty() {
             p.apply_effect_spec(effect).unwrap();
         }
