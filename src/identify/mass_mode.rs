@@ -325,10 +325,11 @@ pub fn lowest_mode_hz(frequency_hz: &[f64], bins: &[usize]) -> f64 {
 /// The table's mass that `apparent` reads under `modes` held (their masses, frequencies
 /// and dampings), over the bins of `bins` above the highest mode among them, clear of its
 /// smeared peak, or all bins clear of the peaks when fewer than [`MIN_SKIRT_BINS`] lie
-/// there; `None` when it is not positive. Where the carried bodies barely move, an error
-/// in their masses mostly enters as the stiffness-like term (`m T(w) -> -m wj^2/w^2`), so
-/// two tests' readings of the same bodies compare (the oil-column test's own search weighed
-/// 2.6 t of a 3.2-t mode at 2.2 Hz that the mass test weighed to 1 %).
+/// there; `None` when it does not fit or is not positive. Where the carried bodies barely
+/// move, an error in their masses mostly enters as the stiffness-like term
+/// (`m T(w) -> -m wj^2/w^2`), so two tests' readings of the same bodies compare (the
+/// oil-column test's own search weighed 2.6 t of a 3.2-t mode at 2.2 Hz that the mass
+/// test weighed to 1 %).
 pub fn table_above_modes_kg(
     frequency_hz: &[f64],
     apparent: &[Complex64],
@@ -344,17 +345,17 @@ pub fn table_above_modes_kg(
         .map(|m| m.frequency_hz)
         .filter(|&f| f < top)
         .fold(0.0, f64::max);
-    let where_ = |keep: &dyn Fn(f64) -> bool| -> Vec<usize> {
+    let bins_where = |keep: &dyn Fn(f64) -> bool| -> Vec<usize> {
         bins.iter()
             .copied()
             .filter(|&i| keep(frequency_hz[i]))
             .collect()
     };
-    let above = where_(&|f| f > highest_mode_hz + smeared);
+    let above = bins_where(&|f| f > highest_mode_hz + smeared);
     let clear = if above.len() >= MIN_SKIRT_BINS {
         above
     } else {
-        where_(&|f| modes.iter().all(|m| (f - m.frequency_hz).abs() > smeared))
+        bins_where(&|f| modes.iter().all(|m| (f - m.frequency_hz).abs() > smeared))
     };
     let under = Data {
         frequency_hz,

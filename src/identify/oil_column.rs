@@ -233,8 +233,9 @@ pub fn fit_oil_column(
     let iv = w
         .frf_instrumental(ch.command, ch.spool, ch.force)
         .map_err(failed)?;
-    // this test's own mass read as the identified mass was: a table carrying modes, or
-    // a rigid body (the two tests' masses offset the measured apparent mass)
+    // this test's own mass read as the identified mass was: under the mass test's
+    // carried modes, or as a rigid body (the two tests' masses offset the measured
+    // apparent mass)
     let own_mass_kg = match &mass.carried {
         Some(carried) => own_mass_carrying(name, rec, fs, mass_kg, carried)?,
         None => fit_rigid_mass(name, rec, fs)?.mass_kg,
