@@ -14,10 +14,10 @@ use crate::identify::fit_table_with_modes;
 use crate::params::Params;
 use num_complex::Complex64;
 
-/// A specimen's starts on a table of `table_mass_kg`: each mode of the table carrying
-/// modes that fits the apparent mass `F/a` less `base`'s friction ([`carried_modes`]: its
-/// mass, frequency and damping), and a resonance at the largest deviation of `F/a` from a rigid
-/// mass, at [`grid::SPECIMEN_MASS_RATIOS`]; the blind grid without the apparent mass.
+/// A specimen's starts on `base`'s table: each mode of the table carrying modes that fits
+/// the apparent mass `F/a` less `base`'s friction ([`carried_modes`]: its mass, frequency
+/// and damping), and a resonance at the largest deviation of `F/a` from the table's mass,
+/// at [`grid::SPECIMEN_MASS_RATIOS`]; the blind grid without the apparent mass.
 pub(super) fn specimen_starts(c: &Campaign, base: &Params) -> Vec<EffectValues> {
     let m = base.table.mass_kg;
     let Some((f, h)) = apparent_mass(c) else {
