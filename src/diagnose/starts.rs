@@ -60,8 +60,7 @@ pub(super) mod grid {
 /// Apparent mass `F/a` of the mass test (R2 in the paper; else the oil-column test:
 /// [`crate::identify::select`]), the reference acceleration as instrument, on 1-40 Hz.
 pub(super) fn apparent_mass(c: &Campaign) -> Option<(Vec<f64>, Vec<Complex64>)> {
-    let roles = random_roles(c);
-    let i = roles.mass.or(roles.oil_column)?;
+    let i = apparent_mass_test(c)?;
     let (r, fs) = (&c.records[i], c.sample_rate_of(i));
     let w = Welch::new(
         fs,
@@ -87,8 +86,7 @@ pub(super) fn apparent_mass_less_friction(
     c: &Campaign,
     base: &Params,
 ) -> Option<(Vec<f64>, Vec<Complex64>)> {
-    let roles = random_roles(c);
-    let i = roles.mass.or(roles.oil_column)?;
+    let i = apparent_mass_test(c)?;
     let e = identify::apparent_mass_less_friction(
         &c.info.tests[i].name,
         &c.records[i],
@@ -98,6 +96,12 @@ pub(super) fn apparent_mass_less_friction(
     )
     .ok()?;
     Some(in_band(&e))
+}
+
+/// The test the apparent mass is read from: the mass test, else the oil-column test.
+fn apparent_mass_test(c: &Campaign) -> Option<usize> {
+    let roles = random_roles(c);
+    roles.mass.or(roles.oil_column)
 }
 
 /// The bins of `e` in [`grid::APPARENT_MASS_BAND_HZ`]: frequencies and `F/a`.

@@ -167,6 +167,24 @@ impl Fit {
 }
 
 impl Data<'_> {
+    /// The width a mode's peak is smeared over on these bins ([`SMEARED_BINS`]), Hz.
+    fn smeared_hz(&self) -> f64 {
+        SMEARED_BINS * median_spacing_hz(self.frequency_hz, self.bins)
+    }
+
+    /// The bins whose frequency `keep` takes.
+    fn bins_where(&self, keep: impl Fn(f64) -> bool) -> Vec<usize> {
+        (self.bins.iter().copied())
+            .filter(|&i| keep(self.frequency_hz[i]))
+            .collect()
+    }
+
+    /// The bins clear of the smeared peaks of modes at `modes_hz`.
+    fn clear_of(&self, modes_hz: &[f64]) -> Vec<usize> {
+        let smeared = self.smeared_hz();
+        self.bins_where(|f| modes_hz.iter().all(|m| (f - m).abs() > smeared))
+    }
+
     /// The linear least squares with the modes at `modes`.
     fn fit(&self, modes: &[(f64, f64)]) -> Option<Fit> {
         let n = modes.len();
@@ -287,15 +305,14 @@ pub fn fit_table_with_modes(
     // friction's low-frequency bend imitates: 7.5 t at 1.73 Hz, 40 % damped, on a clean
     // 6-t table), to a little above the highest (a mode there still bends the top end)
     let [lo, hi] = extent_hz(frequency_hz, bins);
-    let smeared = SMEARED_BINS * median_spacing_hz(frequency_hz, bins);
-    let lowest_mode_hz = lowest_mode_hz(frequency_hz, bins);
-    if !(lo > 0.0 && hi > lowest_mode_hz) {
+    let lowest = lowest_mode_hz(frequency_hz, bins);
+    if !(lo > 0.0 && hi > lowest) {
         return None;
     }
     let grid = Grid {
-        frequencies: log_grid(lowest_mode_hz, ABOVE_BAND * hi, POINTS_PER_DECADE),
+        frequencies: log_grid(lowest, ABOVE_BAND * hi, POINTS_PER_DECADE),
         dampings: log_grid(DAMPING_GRID[0], DAMPING_GRID[1], POINTS_PER_DECADE / 4.0),
-        smeared_hz: smeared,
+        smeared_hz: all.smeared_hz(),
     };
     let mut fits = fits_by_mode_count(&all, &grid)?;
     // the most modes of which the last pays for itself, and all of them together too (a
@@ -339,28 +356,26 @@ pub fn table_above_modes_kg(
     let table: Vec<Complex64> = (0..apparent.len())
         .map(|i| apparent[i] - carried_apparent_mass(modes, frequency_hz[i]))
         .collect();
-    let smeared = SMEARED_BINS * median_spacing_hz(frequency_hz, bins);
+    let all = Data {
+        frequency_hz,
+        apparent: &table,
+        bins,
+    };
+    let smeared = all.smeared_hz();
     let top = extent_hz(frequency_hz, bins)[1];
-    let highest_mode_hz = (modes.iter())
-        .map(|m| m.frequency_hz)
+    let modes_hz: Vec<f64> = modes.iter().map(|m| m.frequency_hz).collect();
+    let highest_mode_hz = (modes_hz.iter().copied())
         .filter(|&f| f < top)
         .fold(0.0, f64::max);
-    let bins_where = |keep: &dyn Fn(f64) -> bool| -> Vec<usize> {
-        bins.iter()
-            .copied()
-            .filter(|&i| keep(frequency_hz[i]))
-            .collect()
-    };
-    let above = bins_where(&|f| f > highest_mode_hz + smeared);
+    let above = all.bins_where(|f| f > highest_mode_hz + smeared);
     let clear = if above.len() >= MIN_SKIRT_BINS {
         above
     } else {
-        bins_where(&|f| modes.iter().all(|m| (f - m.frequency_hz).abs() > smeared))
+        all.clear_of(&modes_hz)
     };
     let under = Data {
-        frequency_hz,
-        apparent: &table,
         bins: &clear,
+        ..all
     };
     under.fit(&[]).filter(Fit::physical).map(|fit| fit.x[0])
 }
@@ -430,16 +445,9 @@ fn without_light_modes(all: &Data, fit: &Fit) -> Option<Fit> {
 /// frequency within the bins left out (over the skirts alone another mode could fit
 /// better); `fit` itself when too few bins are left or the repeat is not physical.
 fn clear_of_peaks(all: &Data, fit: Fit) -> Fit {
-    let smeared = SMEARED_BINS * median_spacing_hz(all.frequency_hz, all.bins);
-    let skirts: Vec<usize> = all
-        .bins
-        .iter()
-        .copied()
-        .filter(|&i| {
-            let f = all.frequency_hz[i];
-            fit.modes.iter().all(|m| (f - m.0).abs() > smeared)
-        })
-        .collect();
+    let smeared = all.smeared_hz();
+    let modes_hz: Vec<f64> = fit.modes.iter().map(|m| m.0).collect();
+    let skirts = all.clear_of(&modes_hz);
     if skirts.len() == all.bins.len() || skirts.len() < MIN_SKIRT_BINS {
         return fit;
     }
