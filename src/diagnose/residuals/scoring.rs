@@ -400,8 +400,17 @@ fn measured_beyond_envelope(p: &Params, r: &Record, range: std::ops::Range<usize
     beyond(r.displacement_m.as_ref(), stroke_m) || beyond(r.force_n.as_ref(), force_n)
 }
 
-/// Sum over `tests` and channels of the squared predictive scores over `part`: the
-/// objective of the fits that cannot use sample-wise least squares (stick-slip, free play).
+/// Noisy runs per prediction in [`score_sum`], the objective of noise-driven effects'
+/// fits: with one draw the predicted spread of chatter or impacts is one realisation, and
+/// the score ranks models wrongly. Measured (stop 55, 6-t table, stick-slip ratio 2.5,
+/// its fitting halves): one draw scored the truth 533, the fitted model 261 and the truth's
+/// baseline with the fitted stick-slip 178 (whose worst held-out cell is 4.6 against the
+/// truth's 1.5); two draws 93, 207 and 122, three and four the same order.
+pub const FIT_SCORE_REALISATIONS: usize = 2;
+
+/// Sum over `tests` and channels of the squared predictive scores over `part`, with
+/// [`FIT_SCORE_REALISATIONS`] noise draws: the objective of the fits that cannot use
+/// sample-wise least squares (stick-slip, free play).
 pub fn score_sum(p: &Params, c: &Campaign, tests: &[usize], noise: &NoiseFloor, part: Part) -> f64 {
     use rayon::prelude::*;
     if p.validate().is_err() {
@@ -410,7 +419,8 @@ pub fn score_sum(p: &Params, c: &Campaign, tests: &[usize], noise: &NoiseFloor, 
     tests
         .par_iter()
         .map(|&i| {
-            test_scores(p, c, i, part, noise)
+            let pred = predict_draws(p, c, i, part.simulated(), noise, FIT_SCORE_REALISATIONS);
+            scores(c, i, &pred, noise, part)
                 .score
                 .values()
                 .filter_map(|cell| cell.figure())
