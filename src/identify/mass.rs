@@ -165,14 +165,24 @@ fn apparent_mass(
 
 /// The table carrying modes that fits the apparent mass of `e` over the mass band's bins
 /// `idx`, or, when it places none there and `rigid` misses most below where it could place
-/// one, over the bins from [`BELOW_BAND_HZ`].
+/// one, over the bins from [`BELOW_BAND_HZ`]; with its own reading of the table above the
+/// modes, which the oil-column test's offset compares with its own
+/// ([`table_above_modes_kg`]).
 fn carried_fit(e: &FrfEstimate, idx: &[usize], rigid: &RigidFit) -> Option<TableWithModes> {
-    fit_table_with_modes(&e.frequency_hz, &e.h1, idx).or_else(|| {
-        let at_edge = rigid.misfit_peak_hz < lowest_mode_hz(&e.frequency_hz, idx);
-        let wide = e.band(BELOW_BAND_HZ, MASS_BAND_HZ[1]);
-        at_edge
-            .then(|| fit_table_with_modes(&e.frequency_hz, &e.h1, &wide))
-            .flatten()
+    let wide = e.band(BELOW_BAND_HZ, MASS_BAND_HZ[1]);
+    let at_edge = || rigid.misfit_peak_hz < lowest_mode_hz(&e.frequency_hz, idx);
+    let (fit, bins) = match fit_table_with_modes(&e.frequency_hz, &e.h1, idx) {
+        Some(fit) => (fit, idx),
+        None if at_edge() => (
+            fit_table_with_modes(&e.frequency_hz, &e.h1, &wide)?,
+            &wide[..],
+        ),
+        None => return None,
+    };
+    let above = table_above_modes_kg(&e.frequency_hz, &e.h1, bins, &fit.modes);
+    Some(TableWithModes {
+        table_above_modes_kg: above,
+        ..fit
     })
 }
 
