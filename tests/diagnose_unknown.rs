@@ -43,25 +43,36 @@ fn synthesise(dir: &Path, seed: u64) {
 
 /// Rewrite column `name` of every test's CSV in `dir` with `f(time_s, value)`.
 fn alter(dir: &Path, name: &str, f: impl Fn(f64, f64) -> f64) {
+    rewrite_column(dir, name, |times, values| {
+        times.iter().zip(values).map(|(&t, &x)| f(t, x)).collect()
+    });
+}
+
+/// Rewrite column `name` of every test's CSV in `dir` with `f(times, values)`, a whole
+/// column at a time (a filter's state starts afresh in each test).
+fn rewrite_column(dir: &Path, name: &str, f: impl Fn(&[f64], &[f64]) -> Vec<f64>) {
     for entry in std::fs::read_dir(dir).unwrap() {
         let path = entry.unwrap().path();
         if path.extension().is_none_or(|e| e != "csv") {
             continue;
         }
         let text = std::fs::read_to_string(&path).unwrap();
-        let mut lines = text.lines();
-        let header = lines.next().unwrap();
-        let cols: Vec<&str> = header.split(',').collect();
+        let rows: Vec<Vec<String>> = text
+            .lines()
+            .map(|l| l.split(',').map(String::from).collect())
+            .collect();
         let (t, j) = (
-            cols.iter().position(|c| *c == "time_s").unwrap(),
-            cols.iter().position(|c| *c == name).unwrap(),
+            rows[0].iter().position(|c| c == "time_s").unwrap(),
+            rows[0].iter().position(|c| c == name).unwrap(),
         );
-        let mut out = vec![header.to_string()];
-        for line in lines {
-            let mut v: Vec<String> = line.split(',').map(String::from).collect();
-            let (time, x) = (v[t].parse::<f64>().unwrap(), v[j].parse::<f64>().unwrap());
-            v[j] = format!("{:e}", f(time, x));
-            out.push(v.join(","));
+        let times: Vec<f64> = rows[1..].iter().map(|r| r[t].parse().unwrap()).collect();
+        let values: Vec<f64> = rows[1..].iter().map(|r| r[j].parse().unwrap()).collect();
+        let new = f(&times, &values);
+        let mut out = vec![rows[0].join(",")];
+        for (r, v) in rows[1..].iter().zip(new) {
+            let mut r = r.clone();
+            r[j] = format!("{v:e}");
+            out.push(r.join(","));
         }
         std::fs::write(&path, out.join("\n") + "\n").unwrap();
     }
@@ -205,22 +216,7 @@ fn campaign_check(dir: &Path) -> String {
 /// Delay column `name` of every test's CSV in `dir` by `delay_s` (linear interpolation
 /// between samples; the first samples hold the first value).
 fn delay(dir: &Path, name: &str, delay_s: f64) {
-    for entry in std::fs::read_dir(dir).unwrap() {
-        let path = entry.unwrap().path();
-        if path.extension().is_none_or(|e| e != "csv") {
-            continue;
-        }
-        let text = std::fs::read_to_string(&path).unwrap();
-        let rows: Vec<Vec<String>> = text
-            .lines()
-            .map(|l| l.split(',').map(String::from).collect())
-            .collect();
-        let (t, j) = (
-            rows[0].iter().position(|c| c == "time_s").unwrap(),
-            rows[0].iter().position(|c| c == name).unwrap(),
-        );
-        let times: Vec<f64> = rows[1..].iter().map(|r| r[t].parse().unwrap()).collect();
-        let values: Vec<f64> = rows[1..].iter().map(|r| r[j].parse().unwrap()).collect();
+    rewrite_column(dir, name, |times, values| {
         let dt = times[1] - times[0];
         let at = |x: f64| {
             let k = (x / dt).floor().max(0.0) as usize;
@@ -228,14 +224,51 @@ fn delay(dir: &Path, name: &str, delay_s: f64) {
             let next = values[(k + 1).min(values.len() - 1)];
             values[k.min(values.len() - 1)] * (1.0 - w) + next * w
         };
-        let mut out = vec![rows[0].join(",")];
-        for (k, r) in rows[1..].iter().enumerate() {
-            let mut r = r.clone();
-            r[j] = format!("{:e}", at((times[k] - times[0] - delay_s).max(0.0)));
-            out.push(r.join(","));
+        (times.iter())
+            .map(|t| at((t - times[0] - delay_s).max(0.0)))
+            .collect()
+    });
+}
+
+/// Pass column `name` of every test's CSV in `dir` through a first-order high-pass of
+/// corner `corner_hz` (`s / (s + wc)`, bilinear), as an AC-coupled accelerometer reads:
+/// `(K + wc) y[n] = K (x[n] - x[n-1]) + (K - wc) y[n-1]`, `K = 2 / dt`, from rest.
+fn high_pass(dir: &Path, name: &str, corner_hz: f64) {
+    rewrite_column(dir, name, |times, values| {
+        let (k, wc) = (
+            2.0 / (times[1] - times[0]),
+            2.0 * std::f64::consts::PI * corner_hz,
+        );
+        let mut y = vec![0.0; values.len()];
+        for n in 1..values.len() {
+            y[n] = (k * (values[n] - values[n - 1]) + (k - wc) * y[n - 1]) / (k + wc);
         }
-        std::fs::write(&path, out.join("\n") + "\n").unwrap();
-    }
+        y
+    });
+}
+
+/// An AC-coupled accelerometer (a piezoelectric sensor's charge amplifier; corner 0.5 Hz)
+/// is read off the recordings alone by `campaign check`: its corner within 3 % (0.501
+/// and 0.499 Hz on seeds 31 and 32 by hand, one with a 10-t specimen; no corner read on
+/// 22 campaigns of every catalogue effect, 6- and 41-t tables), where one gain and one
+/// delay read no test of it. Untouched, the same campaign agrees.
+#[test]
+fn an_ac_coupled_accelerometer_is_named_by_the_recordings_alone() {
+    const CORNER_HZ: f64 = 0.5;
+    let tmp = tempfile::tempdir().unwrap();
+    let dir = tmp.path().join("campaign");
+    synthesise(&dir, 942);
+    let agree = campaign_check(&dir);
+    assert!(agree.contains("they agree"), "{agree}");
+    high_pass(&dir, "acceleration_m_s2", CORNER_HZ);
+    let text = campaign_check(&dir);
+    let corner_hz: f64 = text
+        .split("through a first-order high-pass at ")
+        .nth(1)
+        .and_then(|t| t.split(" Hz").next())
+        .and_then(|t| t.parse().ok())
+        .unwrap_or_else(|| panic!("{text}"));
+    assert!((corner_hz / CORNER_HZ - 1.0).abs() < 0.03, "{text}");
 }
 
 /// How close the sensor finding's factor must come to the accelerometer's error: the

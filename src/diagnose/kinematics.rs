@@ -2,32 +2,25 @@
 //! acceleration is the second derivative of its displacement, so on every test that
 //! recorded both, the accelerometer must read `x''`, with no gain and no time shift
 //! between them. A ratio or a skew that holds over the tests is a sensor's sensitivity
-//! or an acquisition channel's latency. No model enters: a model refined on the
-//! recordings bends to such an error (a 3-ms accelerometer lag moved the refined loop's
-//! timing, and the untouched force then seemed to lead it), so the check names the pair
-//! that disagrees, not which of the two is wrong.
+//! or an acquisition channel's latency; a low-frequency lead that one first-order
+//! high-pass describes is an AC-coupled accelerometer's (a piezoelectric sensor's charge
+//! amplifier), whose reading below a few hertz is not the table's. No model enters: a
+//! model refined on the recordings bends to such an error (a 3-ms accelerometer lag moved
+//! the refined loop's timing, and the untouched force then seemed to lead it), so the
+//! check names the pair that disagrees, not which of the two is wrong. Each test's
+//! reading: [`pair`].
 
 use crate::campaign::Campaign;
-use crate::motion::spectrum::Periodic;
+use pair::read_pair;
 use serde::Serialize;
-use std::f64::consts::PI;
+
+mod pair;
 
 /// The band compared, Hz: above the slow drifts a double derivative cannot hold, below
 /// where the LVDT's noise, raised by the double derivative as f^4, drowns its `x''`
 /// (and at most an eighth of the sample rate).
 const BAND_LOW_HZ: f64 = 0.5;
 const BAND_HIGH_HZ: f64 = 25.0;
-/// Seconds dropped at each end of a test: the double derivative's ringing where the
-/// record's periodic extension joins.
-const EDGE_S: f64 = 2.0;
-/// Frequency resolution of the response, Hz, and the fewest segments averaged.
-const RESOLUTION_HZ: f64 = 0.25;
-const MIN_SEGMENTS: usize = 8;
-/// A bin counts when the two sensors are this coherent there: the noise on either side
-/// then biases H1 or H2 by at most 1 %, and their geometric mean by much less.
-const MIN_COHERENCE: f64 = 0.99;
-/// Coherent bins a test needs: a slope and a level need a few points.
-const MIN_BINS: usize = 3;
 /// A test's reading counts when its bins hold one gain and one delay to this reduced
 /// chi-square: beyond it the two sensors differ by a dynamics (a foundation under the
 /// LVDT's reaction, impacts in free play), which no sensor number describes. Twice the
@@ -46,6 +39,15 @@ const RATIO_SPREAD: f64 = 0.01;
 const SKEW_SPREAD_S: f64 = 2.5e-4;
 /// Tests that must agree for a finding: one may be a fluke of its content.
 const MIN_TESTS: usize = 2;
+/// A high-pass is a finding from this corner on, Hz: below it the phase leads the
+/// table's acceleration by less than 3 degrees at 1 Hz, and the gain is off by 0.1 %.
+const MIN_CORNER_HZ: f64 = 0.05;
+/// ...and when each test's corner lies within this fraction of the mean (beside four of
+/// its own standard errors): one sensor's coupling for all tests.
+const CORNER_SPREAD: f64 = 0.1;
+/// Phase lead, degrees, below which frequency the finding says the accelerometer's
+/// reading is not the table's: `corner / tan(5 deg)`, 11.4 times the corner.
+const CORNER_PHASE_DEG: f64 = 5.0;
 
 /// One test's reading: the accelerometer as `ratio` times `x''`, `lag_s` later
 /// (positive: the accelerometer lags the LVDT), with their standard errors, the
@@ -59,6 +61,11 @@ pub struct PairReading {
     pub lag_sigma_s: f64,
     pub bins: usize,
     pub misfit: f64,
+    /// The corner of a first-order high-pass between the two, Hz, and its standard error,
+    /// when the test reads one (`pair::MIN_CORNER_CHI2_DROP`); `ratio`, `lag_s` and
+    /// `misfit` are then read beside it.
+    pub high_pass_hz: Option<f64>,
+    pub high_pass_sigma_hz: Option<f64>,
 }
 
 /// The check over a campaign: every test's reading that counts, their weighted means,
@@ -72,6 +79,9 @@ pub struct KinematicCheck {
     /// Means over the readings (inverse-variance weights), when there are [`MIN_TESTS`].
     pub ratio: Option<f64>,
     pub lag_s: Option<f64>,
+    /// Mean corner of the readings that read a high-pass, Hz, when [`MIN_TESTS`] do and
+    /// they are at least half of the readings.
+    pub high_pass_hz: Option<f64>,
     /// What the engineer should check, when a ratio or a skew holds over the tests.
     pub finding: Option<String>,
 }
@@ -112,9 +122,12 @@ impl KinematicCheck {
             Some(f) => format!("\nsensor: {f}"),
             None => ": they agree".to_string(),
         };
+        let corner = self
+            .high_pass_hz
+            .map_or(String::new(), |c| format!(", a high-pass at {c:.3} Hz"));
         format!(
             "{head}: ratio {ratio:.4} ({r0:.4} to {r1:.4}), accelerometer lag {:+.3} ms \
-             ({l0:+.3} to {l1:+.3}) on {} of {} tests{verdict}",
+             ({l0:+.3} to {l1:+.3}){corner} on {} of {} tests{verdict}",
             1e3 * lag_s,
             self.readings.len(),
             self.tests
@@ -150,24 +163,32 @@ pub fn check(c: &Campaign) -> Option<KinematicCheck> {
         return None;
     }
     let enough = readings.len() >= MIN_TESTS;
-    let mean = |v: &dyn Fn(&PairReading) -> (f64, f64)| {
-        let (num, den) = readings.iter().map(v).fold((0.0, 0.0), |(n, d), (x, s)| {
-            (n + x / (s * s), d + 1.0 / (s * s))
-        });
-        num / den
-    };
-    let ratio = enough.then(|| mean(&|r| (r.ratio, r.ratio_sigma)));
-    let lag_s = enough.then(|| mean(&|r| (r.lag_s, r.lag_sigma_s)));
+    let ratio = enough.then(|| weighted_mean(readings.iter().map(|r| (r.ratio, r.ratio_sigma))));
+    let lag_s = enough.then(|| weighted_mean(readings.iter().map(|r| (r.lag_s, r.lag_sigma_s))));
+    let corners: Vec<(f64, f64)> = (readings.iter())
+        .filter_map(|r| Some((r.high_pass_hz?, r.high_pass_sigma_hz?)))
+        .collect();
+    let high_pass_hz = (corners.len() >= MIN_TESTS && 2 * corners.len() >= readings.len())
+        .then(|| weighted_mean(corners.into_iter()));
     let mut out = KinematicCheck {
         band_hz,
         tests,
         readings,
         ratio,
         lag_s,
+        high_pass_hz,
         finding: None,
     };
     out.finding = describe(&out);
     Some(out)
+}
+
+/// The inverse-variance weighted mean of `(value, standard error)` pairs.
+fn weighted_mean(values: impl Iterator<Item = (f64, f64)>) -> f64 {
+    let (num, den) = values.fold((0.0, 0.0), |(n, d), (x, s)| {
+        (n + x / (s * s), d + 1.0 / (s * s))
+    });
+    num / den
 }
 
 fn skew_holds(readings: &[PairReading], lag_s: f64) -> bool {
@@ -184,8 +205,54 @@ fn ratio_holds(readings: &[PairReading], ratio: f64) -> bool {
             .all(|r| (r.ratio - ratio).abs() <= RATIO_SPREAD * ratio + 4.0 * r.ratio_sigma)
 }
 
-/// The finding's message, when a ratio or a skew holds over the readings.
+/// Whether one high-pass of at least [`MIN_CORNER_HZ`] holds over the readings that read
+/// one ([`CORNER_SPREAD`]).
+fn corner_holds(readings: &[PairReading], corner_hz: f64) -> bool {
+    corner_hz >= MIN_CORNER_HZ
+        && readings
+            .iter()
+            .all(|r| match (r.high_pass_hz, r.high_pass_sigma_hz) {
+                (Some(c), Some(s)) => (c - corner_hz).abs() <= CORNER_SPREAD * corner_hz + 4.0 * s,
+                _ => true,
+            })
+}
+
+/// The finding's message, when a ratio, a skew or a high-pass holds over the readings.
 fn describe(k: &KinematicCheck) -> Option<String> {
+    let sensitivity_or_timing = describe_gain_and_skew(k);
+    let coupling = (k.high_pass_hz)
+        .filter(|&c| corner_holds(&k.readings, c))
+        .map(|c| describe_high_pass(k, c));
+    match (sensitivity_or_timing, coupling) {
+        (Some(a), Some(b)) => Some(format!("{b}; and {a}")),
+        (a, b) => b.or(a),
+    }
+}
+
+/// The finding on an AC-coupled accelerometer: its corner, and below which frequency its
+/// reading leads the table's acceleration by more than [`CORNER_PHASE_DEG`].
+fn describe_high_pass(k: &KinematicCheck, corner_hz: f64) -> String {
+    let n = k
+        .readings
+        .iter()
+        .filter(|r| r.high_pass_hz.is_some())
+        .count();
+    let below_hz = corner_hz / CORNER_PHASE_DEG.to_radians().tan();
+    format!(
+        "the accelerometer reads the LVDT's second derivative through a first-order \
+         high-pass at {corner_hz:.3} Hz on {n} tests ({:.1}-{:.1} Hz): an AC-coupled \
+         accelerometer (a piezoelectric sensor's charge amplifier, or the acquisition's AC \
+         coupling); below {below_hz:.1} Hz its phase leads the table's acceleration by \
+         more than {CORNER_PHASE_DEG:.0} degrees, and what is read off the acceleration there \
+         (the oil column's damping, the leakage, a stiffness) bends to it: record it \
+         DC-coupled or correct the channel before the table's physics",
+        k.band_hz[0], k.band_hz[1]
+    )
+}
+
+/// The finding's message on a sensitivity or a latency, when a ratio or a skew holds over
+/// the readings.
+fn describe_gain_and_skew(k: &KinematicCheck) -> Option<String> {
     let (ratio, lag_s) = (k.ratio?, k.lag_s?);
     let mut parts = Vec::new();
     if ratio_holds(&k.readings, ratio) {
@@ -218,125 +285,9 @@ fn describe(k: &KinematicCheck) -> Option<String> {
     })
 }
 
-/// One coherent bin of [`read_pair`]: its angular frequency, the response's phase and log
-/// gain, and the inverse-variance weight its coherence gives.
-struct Bin {
-    w_rad_s: f64,
-    phase_rad: f64,
-    log_gain: f64,
-    weight: f64,
-}
-
-/// One test: the frequency response from the LVDT's second derivative to the
-/// accelerometer (Welch, Hann segments), over the bins of `band_hz` where the two are
-/// coherent ([`MIN_COHERENCE`]), read as one gain and one delay: the delay from the
-/// phase's slope and the gain from the log magnitude, each bin weighted by the inverse
-/// variance its coherence gives (`(1 - g^2) / (2 n g^2)` for `n` segments: Bendat &
-/// Piersol, Random Data, 4th ed., section 9.2). The magnitude is the geometric mean of H1 and H2, which the noise on
-/// either side biases in opposite directions. `None` for a test too short or with too
-/// few coherent bins.
-fn read_pair(x: &[f64], a: &[f64], fs: f64, band_hz: [f64; 2]) -> Option<PairReading> {
-    use crate::identify::frf::{Welch, WelchOptions};
-    let n = x.len().min(a.len());
-    let edge = (EDGE_S * fs) as usize;
-    if n <= 2 * edge + 64 || !(band_hz[1] > band_hz[0]) {
-        return None;
-    }
-    let xdd = Periodic::new(&detrended(&x[..n]), fs)
-        .derivative(2)
-        .signal();
-    let (xdd, a) = (&xdd[edge..n - edge], &a[edge..n - edge]);
-    let options = WelchOptions::for_resolution(fs, RESOLUTION_HZ).fit_to(xdd.len(), MIN_SEGMENTS);
-    let est = Welch::new(fs, options).ok()?.frf(xdd, a).ok()?;
-    let segments = est.segments as f64;
-    let bins: Vec<Bin> = est
-        .band(band_hz[0], band_hz[1])
-        .into_iter()
-        .filter(|&k| est.coherence[k] >= MIN_COHERENCE)
-        .map(|k| {
-            let g2 = est.coherence[k];
-            let weight = 2.0 * segments * g2 / (1.0 - g2).max(1e-12);
-            let w = 2.0 * PI * est.frequency_hz[k];
-            let log_gain = 0.5 * (est.h1[k].norm() * est.h2[k].norm()).ln();
-            Bin {
-                w_rad_s: w,
-                phase_rad: est.h1[k].arg(),
-                log_gain,
-                weight,
-            }
-        })
-        .filter(|b| b.w_rad_s > 0.0 && b.phase_rad.is_finite() && b.log_gain.is_finite())
-        .collect();
-    if bins.len() < MIN_BINS {
-        return None;
-    }
-    let sum = |f: &dyn Fn(&Bin) -> f64| bins.iter().map(f).sum::<f64>();
-    let (sww, sw) = (
-        sum(&|b| b.weight * b.w_rad_s * b.w_rad_s),
-        sum(&|b| b.weight),
-    );
-    let lag_s = -sum(&|b| b.weight * b.w_rad_s * b.phase_rad) / sww;
-    let log_ratio = sum(&|b| b.weight * b.log_gain) / sw;
-    let chi2 = sum(&|b| {
-        b.weight * ((b.phase_rad + b.w_rad_s * lag_s).powi(2) + (b.log_gain - log_ratio).powi(2))
-    });
-    Some(PairReading {
-        test: String::new(),
-        ratio: log_ratio.exp(),
-        ratio_sigma: log_ratio.exp() / sw.sqrt(),
-        lag_s,
-        lag_sigma_s: 1.0 / sww.sqrt(),
-        bins: bins.len(),
-        misfit: chi2 / (2 * bins.len() - 2).max(1) as f64,
-    })
-}
-
-/// `y` less the line through its ends, so that its periodic extension does not jump
-/// (a line has no second derivative).
-fn detrended(y: &[f64]) -> Vec<f64> {
-    let n = y.len();
-    let (y0, y1) = (y[0], y[n - 1]);
-    let slope = (y1 - y0) / (n - 1).max(1) as f64;
-    y.iter()
-        .enumerate()
-        .map(|(k, v)| v - y0 - slope * k as f64)
-        .collect()
-}
-
 #[cfg(test)]
 mod tests {
     use super::*;
-
-    /// A random-phase displacement of 40 lines over 0.7-18 Hz (`order` 0), or its exact
-    /// second derivative (`order` 2), at time `t`.
-    fn motion(t: f64, order: i32, seed: u64) -> f64 {
-        (0..40)
-            .map(|k| {
-                let f = 0.7 + 0.45 * k as f64;
-                let phase = ((seed + 7 * k) as f64 * 2.399_963).rem_euclid(2.0 * PI);
-                let w = 2.0 * PI * f;
-                let x = (1e-3 / f) * (w * t + phase).sin();
-                if order == 2 {
-                    -w * w * x
-                } else {
-                    x
-                }
-            })
-            .sum()
-    }
-
-    /// The reading of 40 s at 512 Hz whose accelerometer reads `gain` times the table's
-    /// acceleration `lag_s` late.
-    fn reading(lag_s: f64, gain: f64, seed: u64) -> PairReading {
-        let fs = 512.0;
-        let t: Vec<f64> = (0..40 * 512).map(|k| k as f64 / fs).collect();
-        let x: Vec<f64> = t.iter().map(|&t| motion(t, 0, seed)).collect();
-        let a: Vec<f64> = t
-            .iter()
-            .map(|&t| gain * motion(t - lag_s, 2, seed))
-            .collect();
-        read_pair(&x, &a, fs, [BAND_LOW_HZ, BAND_HIGH_HZ]).unwrap()
-    }
 
     fn at(lag_ms: f64, ratio: f64) -> PairReading {
         PairReading {
@@ -347,6 +298,16 @@ mod tests {
             lag_sigma_s: 1e-5,
             bins: 30,
             misfit: 1.0,
+            high_pass_hz: None,
+            high_pass_sigma_hz: None,
+        }
+    }
+
+    fn with_corner(corner_hz: f64, r: PairReading) -> PairReading {
+        PairReading {
+            high_pass_hz: Some(corner_hz),
+            high_pass_sigma_hz: Some(1e-3),
+            ..r
         }
     }
 
@@ -359,6 +320,7 @@ mod tests {
                 .then(|| readings.iter().map(|r| r.ratio).sum::<f64>() / n as f64),
             lag_s: (n >= MIN_TESTS)
                 .then(|| readings.iter().map(|r| r.lag_s).sum::<f64>() / n as f64),
+            high_pass_hz: readings[0].high_pass_hz,
             readings,
             finding: None,
         };
@@ -389,17 +351,31 @@ mod tests {
     }
 
     #[test]
-    fn agreeing_sensors_read_one_and_no_lag() {
-        let r = reading(0.0, 1.0, 3);
-        assert!((r.ratio - 1.0).abs() < 2e-3, "{r:?}");
-        assert!(r.lag_s.abs() < 2e-5, "{r:?}");
-    }
-
-    #[test]
-    fn a_late_scaled_accelerometer_is_read_as_such() {
-        // 3 ms is a sample and a half at 512 Hz
-        let r = reading(0.003, 1.05, 5);
-        assert!((r.ratio - 1.05).abs() < 3e-3, "{r:?}");
-        assert!((r.lag_s - 0.003).abs() < 5e-5, "{r:?}");
+    fn one_high_pass_over_the_tests_is_a_finding() {
+        let k = checked(vec![
+            with_corner(0.5, at(0.0, 1.0)),
+            with_corner(0.51, at(0.0, 1.0)),
+        ]);
+        let f = k.finding.expect("a finding");
+        assert!(f.contains("high-pass at 0.500 Hz on 2 tests"), "{f}");
+        assert!(!f.contains("sensitivity or"), "{f}");
+        // corners far apart are no one coupling; one too small to matter is none
+        let apart = checked(vec![
+            with_corner(0.5, at(0.0, 1.0)),
+            with_corner(0.9, at(0.0, 1.0)),
+        ]);
+        assert!(apart.finding.is_none());
+        let tiny = checked(vec![
+            with_corner(0.01, at(0.0, 1.0)),
+            with_corner(0.01, at(0.0, 1.0)),
+        ]);
+        assert!(tiny.finding.is_none());
+        // with a late accelerometer beside it, both are said
+        let both = checked(vec![
+            with_corner(0.5, at(2.0, 1.0)),
+            with_corner(0.5, at(2.0, 1.0)),
+        ]);
+        let f = both.finding.unwrap();
+        assert!(f.contains("high-pass") && f.contains("runs 2.00 ms"), "{f}");
     }
 }
