@@ -251,7 +251,8 @@ fn high_pass(dir: &Path, name: &str, corner_hz: f64) {
 /// is read off the recordings alone by `campaign check`: its corner within 3 % (0.501
 /// and 0.499 Hz on seeds 31 and 32 by hand, one with a 10-t specimen; no corner read on
 /// 22 campaigns of every catalogue effect, 6- and 41-t tables), where one gain and one
-/// delay read no test of it. Untouched, the same campaign agrees.
+/// delay read no test of it. Untouched, the same campaign agrees. `identify`'s JSON
+/// carries the same check (`kinematics`).
 #[test]
 fn an_ac_coupled_accelerometer_is_named_by_the_recordings_alone() {
     const CORNER_HZ: f64 = 0.5;
@@ -269,6 +270,25 @@ fn an_ac_coupled_accelerometer_is_named_by_the_recordings_alone() {
         .and_then(|t| t.parse().ok())
         .unwrap_or_else(|| panic!("{text}"));
     assert!((corner_hz / CORNER_HZ - 1.0).abs() < 0.03, "{text}");
+    // identify's JSON carries the same check: what a script reading it sees
+    let json = tmp.path().join("identified.json");
+    let o = Command::new(env!("CARGO_BIN_EXE_shaketable"))
+        .args(["identify", "--json"])
+        .args([&json, &dir])
+        .output()
+        .unwrap();
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let v: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(&json).unwrap()).unwrap();
+    let k = &v["kinematics"];
+    let read = k["high_pass_hz"]
+        .as_f64()
+        .unwrap_or_else(|| panic!("{k:#}"));
+    assert!((read - corner_hz).abs() < 5e-4, "{k:#}");
+    assert!(
+        k["finding"].as_str().unwrap().contains("AC-coupled"),
+        "{k:#}"
+    );
 }
 
 /// How close the sensor finding's factor must come to the accelerometer's error: the

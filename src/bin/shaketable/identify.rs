@@ -70,8 +70,10 @@ pub fn run(args: Args) -> anyhow::Result<()> {
         "{}",
         shaketable::report::read::screening_text(&id.screening)
     );
-    // a model identified from motion sensors at odds bends to their error
-    if let Some(k) = shaketable::diagnose::kinematics::check(&campaign) {
+    // a model identified from motion sensors at odds bends to their error: said here and
+    // in the JSON (`kinematics`, as the diagnosis's)
+    let kinematics = shaketable::diagnose::kinematics::check(&campaign);
+    if let Some(k) = &kinematics {
         println!("{}", k.text());
     }
     // a resonance in the mass band: the rigid model's mass is a compromise, say so
@@ -87,8 +89,10 @@ pub fn run(args: Args) -> anyhow::Result<()> {
     if let Some(cl) = &id.closed_loop {
         print!("{}", shaketable::report::closed_loop::text(cl));
     }
+    let mut json = id.to_json();
+    json["kinematics"] = serde_json::to_value(&kinematics)?;
     outputs.write(
-        &(serde_json::to_string_pretty(&id.to_json())? + "\n"),
+        &(serde_json::to_string_pretty(&json)? + "\n"),
         &id.params.to_toml_string(),
         |dir| {
             Ok(shaketable::report::identify::write(
