@@ -82,7 +82,8 @@ pub struct KinematicCheck {
     /// Mean corner of the readings that read a high-pass, Hz, when [`MIN_TESTS`] do and
     /// they are at least half of the readings.
     pub high_pass_hz: Option<f64>,
-    /// What the engineer should check, when a ratio or a skew holds over the tests.
+    /// What the engineer should check, when a ratio, a skew or a high-pass holds over the
+    /// tests.
     pub finding: Option<String>,
 }
 
