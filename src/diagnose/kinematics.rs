@@ -61,11 +61,18 @@ pub struct PairReading {
     pub lag_sigma_s: f64,
     pub bins: usize,
     pub misfit: f64,
-    /// The corner of a first-order high-pass between the two, Hz, and its standard error,
-    /// when the test reads one (`pair::MIN_CORNER_CHI2_DROP`); `ratio`, `lag_s` and
-    /// `misfit` are then read beside it.
-    pub high_pass_hz: Option<f64>,
-    pub high_pass_sigma_hz: Option<f64>,
+    /// The first-order high-pass between the two, when the test reads one
+    /// (`pair::MIN_CORNER_CHI2_DROP`); `ratio`, `lag_s` and `misfit` are then read
+    /// beside it.
+    pub high_pass: Option<HighPass>,
+}
+
+/// A first-order high-pass read between the two sensors: its corner and the corner's
+/// standard error, Hz.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize)]
+pub struct HighPass {
+    pub corner_hz: f64,
+    pub sigma_hz: f64,
 }
 
 /// The check over a campaign: every test's reading that counts, their weighted means,
@@ -167,7 +174,7 @@ pub fn check(c: &Campaign) -> Option<KinematicCheck> {
     let ratio = enough.then(|| weighted_mean(readings.iter().map(|r| (r.ratio, r.ratio_sigma))));
     let lag_s = enough.then(|| weighted_mean(readings.iter().map(|r| (r.lag_s, r.lag_sigma_s))));
     let corners: Vec<(f64, f64)> = (readings.iter())
-        .filter_map(|r| Some((r.high_pass_hz?, r.high_pass_sigma_hz?)))
+        .filter_map(|r| r.high_pass.map(|h| (h.corner_hz, h.sigma_hz)))
         .collect();
     let high_pass_hz = (corners.len() >= MIN_TESTS && 2 * corners.len() >= readings.len())
         .then(|| weighted_mean(corners.into_iter()));
@@ -210,12 +217,9 @@ fn ratio_holds(readings: &[PairReading], ratio: f64) -> bool {
 /// one ([`CORNER_SPREAD`]).
 fn corner_holds(readings: &[PairReading], corner_hz: f64) -> bool {
     corner_hz >= MIN_CORNER_HZ
-        && readings
-            .iter()
-            .all(|r| match (r.high_pass_hz, r.high_pass_sigma_hz) {
-                (Some(c), Some(s)) => (c - corner_hz).abs() <= CORNER_SPREAD * corner_hz + 4.0 * s,
-                _ => true,
-            })
+        && readings.iter().filter_map(|r| r.high_pass).all(|h| {
+            (h.corner_hz - corner_hz).abs() <= CORNER_SPREAD * corner_hz + 4.0 * h.sigma_hz
+        })
 }
 
 /// The finding's message, when a ratio, a skew or a high-pass holds over the readings.
@@ -233,11 +237,7 @@ fn describe(k: &KinematicCheck) -> Option<String> {
 /// The finding on an AC-coupled accelerometer: its corner, and below which frequency its
 /// reading leads the table's acceleration by more than [`CORNER_PHASE_DEG`].
 fn describe_high_pass(k: &KinematicCheck, corner_hz: f64) -> String {
-    let n = k
-        .readings
-        .iter()
-        .filter(|r| r.high_pass_hz.is_some())
-        .count();
+    let n = k.readings.iter().filter(|r| r.high_pass.is_some()).count();
     let below_hz = corner_hz / CORNER_PHASE_DEG.to_radians().tan();
     format!(
         "the accelerometer reads the LVDT's second derivative through a first-order \
@@ -299,15 +299,16 @@ mod tests {
             lag_sigma_s: 1e-5,
             bins: 30,
             misfit: 1.0,
-            high_pass_hz: None,
-            high_pass_sigma_hz: None,
+            high_pass: None,
         }
     }
 
     fn with_corner(corner_hz: f64, r: PairReading) -> PairReading {
         PairReading {
-            high_pass_hz: Some(corner_hz),
-            high_pass_sigma_hz: Some(1e-3),
+            high_pass: Some(HighPass {
+                corner_hz,
+                sigma_hz: 1e-3,
+            }),
             ..r
         }
     }
@@ -321,7 +322,7 @@ mod tests {
                 .then(|| readings.iter().map(|r| r.ratio).sum::<f64>() / n as f64),
             lag_s: (n >= MIN_TESTS)
                 .then(|| readings.iter().map(|r| r.lag_s).sum::<f64>() / n as f64),
-            high_pass_hz: readings[0].high_pass_hz,
+            high_pass_hz: readings[0].high_pass.map(|h| h.corner_hz),
             readings,
             finding: None,
         };

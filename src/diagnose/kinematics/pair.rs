@@ -3,7 +3,7 @@
 //! gain and one delay, and through a first-order high-pass when one describes the
 //! low-frequency lead better (an AC-coupled accelerometer).
 
-use super::PairReading;
+use super::{HighPass, PairReading};
 use crate::motion::spectrum::Periodic;
 use std::f64::consts::PI;
 
@@ -94,8 +94,7 @@ pub(super) fn read_pair(x: &[f64], a: &[f64], fs: f64, band_hz: [f64; 2]) -> Opt
         lag_sigma_s: 1.0 / fit.sww.sqrt(),
         bins: bins.len(),
         misfit: fit.chi2 / dof.max(1) as f64,
-        high_pass_hz: corner.as_ref().map(|c| c.corner_hz),
-        high_pass_sigma_hz: corner.as_ref().map(|c| c.sigma_hz),
+        high_pass: corner.map(|c| c.high_pass),
     })
 }
 
@@ -138,11 +137,9 @@ impl Solved {
     }
 }
 
-/// A test's high-pass: its corner and standard error, Hz, and the gain and delay read
-/// beside it.
+/// A test's high-pass, and the gain and delay read beside it.
 struct Corner {
-    corner_hz: f64,
-    sigma_hz: f64,
+    high_pass: HighPass,
     solved: Solved,
 }
 
@@ -181,8 +178,10 @@ fn fit_corner(bins: &[Bin], plain: &Solved) -> Option<Corner> {
         / (h * h);
     let sigma_wc = (2.0 * reduced / curvature).sqrt();
     (curvature > 0.0).then(|| Corner {
-        corner_hz: wc / (2.0 * PI),
-        sigma_hz: sigma_wc / (2.0 * PI),
+        high_pass: HighPass {
+            corner_hz: wc / (2.0 * PI),
+            sigma_hz: sigma_wc / (2.0 * PI),
+        },
         solved,
     })
 }
@@ -246,7 +245,7 @@ mod tests {
         let r = reading(0.0, 1.0, 3);
         assert!((r.ratio - 1.0).abs() < 2e-3, "{r:?}");
         assert!(r.lag_s.abs() < 2e-5, "{r:?}");
-        assert_eq!(r.high_pass_hz, None, "{r:?}");
+        assert_eq!(r.high_pass, None, "{r:?}");
     }
 
     /// An AC-coupled accelerometer (first-order high-pass at 0.1 to 1 Hz), also scaled and
@@ -262,8 +261,9 @@ mod tests {
         ] {
             let r = reading_through(lag_s, gain, corner_hz, seed);
             let read = r
-                .high_pass_hz
-                .unwrap_or_else(|| panic!("{corner_hz} Hz: {r:?}"));
+                .high_pass
+                .unwrap_or_else(|| panic!("{corner_hz} Hz: {r:?}"))
+                .corner_hz;
             assert!(
                 (read - corner_hz).abs() < 0.03 * corner_hz + 0.015,
                 "{corner_hz} Hz: {r:?}"
