@@ -52,10 +52,6 @@ const STEPS: [f64; 5] = [0.1, 0.3, 0.15, 0.3, 0.03];
 /// went to 0.40 mm.
 const GAP_READ_SPAN: f64 = 1.1;
 
-/// Brent iterations of the loop gain's search: from a 1e-2 bracket to 1e-5 takes about
-/// fifteen golden sections; the cap only stops one that does not converge.
-const LOOP_GAIN_ITERATIONS: u64 = 30;
-
 /// Nelder-Mead iterations: five parameters, each score a few tenths of a second.
 const MAX_ITERATIONS: u64 = 40;
 
@@ -88,8 +84,10 @@ const LEAKAGE_AT: usize = EFFECT_LEN + 1;
 /// other variant's best when that model leaves the envelope on a whole run where the
 /// model it extends stays inside); then, as stick-slip's fit does,
 /// the baseline is unbent by output error on the fitting tests (`ctx.fit_idx`) with the play
-/// held, and polished again while the score improves. Returns the score, the effect's
-/// parameters and the model.
+/// held, and polished again while the score improves. Last, the loop gain, the friction
+/// with the friction-dominated tests beside, and the loop gain again, on the score
+/// ([`PlayFit::loop_gain_polished`], [`PlayFit::friction_polished`]). Returns the score,
+/// the effect's parameters and the model.
 pub(super) fn fit_free_play(
     bases: &[Params],
     sig: &[usize],
@@ -157,6 +155,10 @@ const LOOP_GAIN_SPAN: f64 = 5e-3;
 /// fundamental reads the loop gain to about 1e-4 (a 1e-4 error left S9's valve
 /// command below 1 Hz at 3.8 where the truth's is 1.1, seed 459), so a tenth of that.
 const LOOP_GAIN_TOLERANCE: f64 = 1e-5;
+
+/// Brent iterations of the loop gain's search: from a 1e-2 bracket to 1e-5 takes about
+/// fifteen golden sections; the cap only stops one that does not converge.
+const LOOP_GAIN_ITERATIONS: u64 = 30;
 
 /// A score and the point it was taken at.
 type Scored = (f64, Vec<f64>);
