@@ -406,34 +406,24 @@ impl<'a> PlayFit<'a> {
     /// and called a second search that found nothing. The sample-wise refinement cannot
     /// see it beside the impacts' chaotic residual; the score's band cells do.
     fn loop_gain_polished(&self, p: Params, score: f64) -> (f64, Params) {
-        use argmin::core::{CostFunction, Executor};
-        use argmin::solver::brent::BrentOpt;
-        struct Scaled<'a, 'b>(&'a PlayFit<'b>, Params);
-        impl CostFunction for Scaled<'_, '_> {
-            type Param = f64;
-            type Output = f64;
-            fn cost(&self, ln_scale: &f64) -> Result<f64, argmin::core::Error> {
-                let mut p = self.1;
-                p.actuator.flow_gain_m3_s *= ln_scale.exp();
-                Ok(self.0.score_of(&p))
-            }
-        }
-        let solver = BrentOpt::new(-LOOP_GAIN_SPAN, LOOP_GAIN_SPAN)
-            .set_tolerance(LOOP_GAIN_TOLERANCE / LOOP_GAIN_SPAN, LOOP_GAIN_TOLERANCE);
-        let found = Executor::new(Scaled(self, p), solver)
-            .configure(|s| s.max_iters(LOOP_GAIN_ITERATIONS))
-            .run()
-            .ok()
-            .and_then(|r| Some((r.state.best_param?, r.state.best_cost)));
+        let scaled = |ln_scale: f64| {
+            let mut q = p;
+            q.actuator.flow_gain_m3_s *= ln_scale.exp();
+            q
+        };
+        let found = simplex::brent(
+            |ln_scale| self.score_of(&scaled(ln_scale)),
+            [-LOOP_GAIN_SPAN, LOOP_GAIN_SPAN],
+            [LOOP_GAIN_TOLERANCE / LOOP_GAIN_SPAN, LOOP_GAIN_TOLERANCE],
+            LOOP_GAIN_ITERATIONS,
+        );
         match found {
             Some((ln_scale, s)) if s < score => {
-                let mut scaled = p;
-                scaled.actuator.flow_gain_m3_s *= ln_scale.exp();
                 self.trace(&format!(
                     "loop gain x{:.6}: score {s:.2} (was {score:.2})",
                     ln_scale.exp()
                 ));
-                (s, scaled)
+                (s, scaled(ln_scale))
             }
             _ => (score, p),
         }

@@ -149,23 +149,13 @@ struct Corner {
 /// chi-square's curvature, scaled by the reduced chi-square (the scatter beyond the
 /// coherence's variance).
 fn fit_corner(bins: &[Bin], plain: &Solved) -> Option<Corner> {
-    use argmin::core::{CostFunction, Executor};
-    use argmin::solver::brent::BrentOpt;
-    struct Chi2<'a>(&'a [Bin]);
-    impl CostFunction for Chi2<'_> {
-        type Param = f64;
-        type Output = f64;
-        fn cost(&self, wc: &f64) -> Result<f64, argmin::core::Error> {
-            Ok(Solved::at(self.0, *wc).chi2)
-        }
-    }
     let max_wc = 2.0 * PI * MAX_CORNER_HZ;
-    let solver = BrentOpt::new(0.0, max_wc).set_tolerance(1e-8, 1e-6);
-    let result = Executor::new(Chi2(bins), solver)
-        .configure(|s| s.max_iters(200))
-        .run()
-        .ok()?;
-    let wc = result.state.best_param?;
+    let (wc, _) = crate::diagnose::simplex::brent(
+        |wc| Solved::at(bins, wc).chi2,
+        [0.0, max_wc],
+        [1e-8, 1e-6],
+        200,
+    )?;
     let solved = Solved::at(bins, wc);
     let dof = (2 * bins.len()).saturating_sub(3).max(1) as f64;
     let reduced = (solved.chi2 / dof).max(1.0);
