@@ -150,7 +150,7 @@ fn fit_on_score(
     trace: &FitTrace,
 ) -> Option<Candidate> {
     let fit = match e.row().fit {
-        FitKind::StickSlip => fit_stick_slip(&bases[0], sig, ctx)?,
+        FitKind::StickSlip => fit_stick_slip(&bases[0], sig, ctx, trace)?,
         _ => {
             // without a gap read off the reversals there is no play to fit: its impacts
             // are chaotic, and a fit from a guess lands wherever the bounces misfit least
