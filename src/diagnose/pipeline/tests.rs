@@ -176,3 +176,16 @@ fn the_spread_rule_comes_last() {
         Verdict::Cause
     ));
 }
+
+/// A specimen's further modes are fitted unless another candidate already scores
+/// [`super::FURTHER_MODES_WITHIN`] times better; a score that is not a number decides nothing.
+#[test]
+fn further_modes_are_skipped_only_far_behind_another_candidate() {
+    let k = super::FURTHER_MODES_WITHIN;
+    assert!(super::further_modes_may_matter(0.7, 1.0));
+    assert!(super::further_modes_may_matter(k * 1.0, 1.0));
+    assert!(super::further_modes_may_matter(14.0, f64::INFINITY));
+    assert!(super::further_modes_may_matter(f64::NAN, 1.0));
+    // the 12-Hz foundation of seed 453: one mode at 14.1, the foundation at 0.67
+    assert!(!super::further_modes_may_matter(14.084, 0.671));
+}
