@@ -87,12 +87,13 @@ const LEAKAGE_AT: usize = EFFECT_LEN + 1;
 /// window powers follow the gap smoothly. From `start` (the gap and the rod's mass read
 /// off the data), the best base among `bases`, in either actuator variant, with its oil
 /// column stiffened by [`OIL_COLUMN_FACTORS`] and its leakage cut by [`LEAKAGE_FACTORS`]
-/// (and any within [`NEAR_TIE`] of it) starts a Nelder-Mead polish of the gap (held within [`GAP_READ_SPAN`] of the
-/// reading), the rod's mass and [`POLISHED`] on the signature tests' fitting halves (the
-/// other variant's best when that model leaves the envelope on a whole run where the
-/// model it extends stays inside); then, as stick-slip's fit does,
-/// the baseline is unbent by output error on the fitting tests (`ctx.fit_idx`) with the play
-/// held, and polished again while the score improves. Last, the loop gain, the friction
+/// (and any start within [`NEAR_TIE`] of it) starts a Nelder-Mead polish of the gap (held
+/// within [`GAP_READ_SPAN`] of the reading), the rod's mass and [`POLISHED`] on the
+/// signature tests' fitting halves, the best polish kept (the other variant's best when
+/// that model leaves the envelope on a whole run where the model it extends stays
+/// inside); then, as stick-slip's fit does, the baseline is unbent by output error on the
+/// fitting tests (`ctx.fit_idx`) with the play held, and polished again while the score
+/// improves. Last, the loop gain, the friction
 /// with the friction-dominated tests beside, and the loop gain again, on the score
 /// ([`PlayFit::loop_gain_polished`], [`PlayFit::friction_polished`]). Returns the score,
 /// the effect's parameters and the model.

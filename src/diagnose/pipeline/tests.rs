@@ -178,7 +178,8 @@ fn the_spread_rule_comes_last() {
 }
 
 /// A specimen's further modes are fitted unless another candidate already scores
-/// [`super::FURTHER_MODES_WITHIN`] times better; a score that is not a number decides nothing.
+/// [`super::FURTHER_MODES_WITHIN`] times better; a score that is not a number decides
+/// nothing.
 #[test]
 fn further_modes_are_skipped_only_far_behind_another_candidate() {
     let k = super::FURTHER_MODES_WITHIN;
