@@ -11,6 +11,7 @@ pub mod init;
 pub mod matlab;
 pub mod provenance;
 mod rest;
+pub mod reversals;
 pub mod screen;
 pub mod synth;
 

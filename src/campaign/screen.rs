@@ -11,6 +11,7 @@ use super::{Campaign, Record, TestKind, TestSpec};
 use serde::Serialize;
 
 mod kind;
+mod pulses;
 pub use kind::{
     NET_WORK_SIGN_MIN, SINE_EXPLAINED_MIN, TRIANGLE_CONSTANT_SPEED_MIN,
     TRIANGLE_FREQUENCY_TOLERANCE,
@@ -46,6 +47,8 @@ pub enum Action {
     /// The channel is kept out of every comparison with the model (section 4 and the
     /// rest of the test still use it).
     ChannelSetAside,
+    /// Samples that look like glitches are kept: they are the table's response.
+    KeptAsResponse,
 }
 
 impl Action {
@@ -55,6 +58,7 @@ impl Action {
             Action::Repaired => "repaired",
             Action::TestExcluded => "test excluded from estimation",
             Action::ChannelSetAside => "channel not compared with the model",
+            Action::KeptAsResponse => "kept as the table's response",
         }
     }
 }
@@ -216,6 +220,7 @@ fn screen_record(spec: &TestSpec, r: &mut Record, fs: f64, out: &mut Vec<Finding
         return false;
     }
     let max_repaired = ((n as f64 * MAX_REPAIRED_FRACTION) as usize).max(1);
+    let windows = pulses::ResponseWindows::of(spec, r, fs);
     let mut ok = true;
     for (name, x) in channels_mut(r) {
         if x.len() != n {
@@ -227,7 +232,7 @@ fn screen_record(spec: &TestSpec, r: &mut Record, fs: f64, out: &mut Vec<Finding
             ok = false;
             continue;
         }
-        ok &= screen_channel(name, x, max_repaired, out);
+        ok &= screen_channel(name, x, max_repaired, windows.as_ref(), out);
     }
     if !ok {
         return false;
@@ -237,8 +242,16 @@ fn screen_record(spec: &TestSpec, r: &mut Record, fs: f64, out: &mut Vec<Finding
     ok
 }
 
-/// Non-finite samples, spikes and flat channels of one channel; false to exclude.
-fn screen_channel(name: &str, x: &mut [f64], max_repaired: usize, out: &mut Vec<Finding>) -> bool {
+/// Non-finite samples, spikes and flat channels of one channel; false to exclude. Spikes
+/// that all follow the reversals of a periodic test's reference (`windows`) are its
+/// response and are kept, with a note ([`pulses`]).
+fn screen_channel(
+    name: &str,
+    x: &mut [f64],
+    max_repaired: usize,
+    windows: Option<&pulses::ResponseWindows>,
+    out: &mut Vec<Finding>,
+) -> bool {
     let bad_nf: Vec<usize> = (0..x.len()).filter(|&i| !x[i].is_finite()).collect();
     if bad_nf.len() > max_repaired {
         let msg = format!(
@@ -249,7 +262,16 @@ fn screen_channel(name: &str, x: &mut [f64], max_repaired: usize, out: &mut Vec<
         out.push(finding(name, Action::TestExcluded, msg));
         return false;
     }
-    let spikes = spikes(x);
+    let (mut spikes, median) = spikes(x);
+    if !spikes.is_empty() && windows.is_some_and(|w| w.hold(x, median, &spikes)) {
+        let msg = format!(
+            "{} samples beyond {SPIKE_ROBUST_SIGMAS} robust sigmas, all shortly after \
+             reversals of the reference: the table's response (impacts, chatter), not glitches",
+            spikes.len()
+        );
+        out.push(finding(name, Action::KeptAsResponse, msg));
+        spikes.clear();
+    }
     let mut bad: Vec<usize> = bad_nf.iter().chain(&spikes).copied().collect();
     bad.sort_unstable();
     bad.dedup();
@@ -301,17 +323,18 @@ fn median(v: &mut [f64]) -> f64 {
     v[v.len() / 2]
 }
 
-/// Indices of finite samples that are outliers of both the record and their neighbours.
-fn spikes(x: &[f64]) -> Vec<usize> {
+/// Indices of finite samples that are outliers of both the record and their neighbours,
+/// and the record's median.
+fn spikes(x: &[f64]) -> (Vec<usize>, f64) {
     let mut fin: Vec<f64> = x.iter().copied().filter(|v| v.is_finite()).collect();
     let med = median(&mut fin);
     let mut dev: Vec<f64> = fin.iter().map(|v| (v - med).abs()).collect();
     let sigma = 1.4826 * median(&mut dev);
     if sigma.is_nan() || sigma <= 0.0 {
-        return Vec::new();
+        return (Vec::new(), med);
     }
     let lim = SPIKE_ROBUST_SIGMAS * sigma;
-    (0..x.len())
+    let spikes = (0..x.len())
         .filter(|&i| x[i].is_finite() && (x[i] - med).abs() > lim)
         .filter(|&i| {
             let lo = i.saturating_sub(SPIKE_WINDOW_HALF);
@@ -323,7 +346,8 @@ fn spikes(x: &[f64]) -> Vec<usize> {
                 .collect();
             (x[i] - median(&mut w)).abs() > lim
         })
-        .collect()
+        .collect();
+    (spikes, med)
 }
 
 /// Replace `bad` (sorted) by linear interpolation between the nearest good samples.
@@ -418,7 +442,7 @@ mod tests {
     fn isolated_spike_is_found_and_repaired() {
         let mut x: Vec<f64> = (0..1000).map(|k| (k as f64 * 0.05).sin()).collect();
         x[500] = 1e300;
-        let s = spikes(&x);
+        let (s, _) = spikes(&x);
         assert_eq!(s, vec![500]);
         assert!(interpolate(&mut x, &s));
         assert!((x[500] - (25.0f64).sin()).abs() < 0.01);

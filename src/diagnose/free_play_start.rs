@@ -9,6 +9,7 @@
 use super::effect::{tests_of, Effect};
 use super::effect_values::EffectValues;
 use super::residuals::median;
+use crate::campaign::reversals::reversals;
 use crate::campaign::{line_fit, Campaign};
 use crate::effects::SignatureTests;
 use crate::params::Params;
@@ -36,12 +37,6 @@ const AFTER_S: f64 = 1.2;
 /// accelerometer's noise above about 50 Hz out, the gap's crossing (tenths of a second)
 /// kept.
 const SMOOTHING_S: f64 = 0.02;
-/// A reference that changes sign within this many seconds reverses; a rest (zero speed
-/// for longer) between two motions is not a reversal.
-const REVERSAL_MAX_S: f64 = 0.1;
-/// Reference speeds below this share of the test's largest count as zero: a derived
-/// reference velocity wanders about zero at rest.
-const REST_SPEED_FRACTION: f64 = 1e-3;
 /// Fewest reversals whose median is read as a gap.
 const MIN_REVERSALS: usize = 3;
 /// The reversals' median rise must exceed this multiple of the rise mid-stroke (where
@@ -100,27 +95,6 @@ pub(super) fn free_play_start(
             &[("gap_m", gap), ("rod_mass_kg", rod_mass_kg)],
         )
     })
-}
-
-/// The reference's reversals: the first sample of each new direction and that direction
-/// (+-1), where the sign changes within [`REVERSAL_MAX_S`].
-fn reversals(v: &[f64], fs: f64) -> Vec<(usize, f64)> {
-    let rest = REST_SPEED_FRACTION * v.iter().fold(0.0f64, |m, x| m.max(x.abs()));
-    let mut out = Vec::new();
-    let mut last: Option<(usize, f64)> = None;
-    for (k, &x) in v.iter().enumerate() {
-        if x.abs() <= rest {
-            continue;
-        }
-        let s = x.signum();
-        if let Some((j, t)) = last {
-            if t != s && ((k - j) as f64) < REVERSAL_MAX_S * fs {
-                out.push((k, s));
-            }
-        }
-        last = Some((k, s));
-    }
-    out
 }
 
 /// The rise, in `direction`, of the LVDT less the doubly integrated acceleration from
@@ -199,21 +173,5 @@ mod tests {
             let start = free_play_start(&c, &Params::trees_lab(), 1500.0);
             assert_eq!(start, None, "seed {seed}");
         }
-    }
-
-    /// A reference through zero reverses; one that rests at zero and sets off again the
-    /// other way does not.
-    #[test]
-    fn reversals_are_sign_changes_without_a_rest() {
-        let fs = 100.0;
-        let mut v: Vec<f64> = (0..200)
-            .map(|k| ((k as f64) / 50.0 * std::f64::consts::PI).sin())
-            .collect();
-        v.extend(std::iter::repeat_n(0.0, 100));
-        // the last motion was negative: setting off positive after the rest
-        v.extend((0..50).map(|k| (k as f64 + 1.0) / 50.0));
-        let r = reversals(&v, fs);
-        assert_eq!(r.len(), 3, "{r:?}");
-        assert!(r.iter().all(|&(k, _)| k < 200), "{r:?}");
     }
 }
