@@ -31,6 +31,28 @@ pub fn reversals(v: &[f64], fs: f64) -> Vec<(usize, f64)> {
     out
 }
 
+/// Every sample where the reference's motion changes: its reversals, and where it sets off
+/// from rest or comes to rest (a rest being a pause of at least [`REVERSAL_MAX_S`], or the
+/// record's ends), sorted. A play between rod and table is crossed at each.
+pub fn motion_changes(v: &[f64], fs: f64) -> Vec<usize> {
+    let rest = REST_SPEED_FRACTION * v.iter().fold(0.0f64, |m, x| m.max(x.abs()));
+    let moving: Vec<usize> = (0..v.len()).filter(|&k| v[k].abs() > rest).collect();
+    let (Some(&first), Some(&last)) = (moving.first(), moving.last()) else {
+        return Vec::new();
+    };
+    let mut out = vec![first];
+    for w in moving.windows(2) {
+        if ((w[1] - w[0]) as f64) >= REVERSAL_MAX_S * fs {
+            out.extend([w[0], w[1]]);
+        }
+    }
+    out.push(last);
+    out.extend(reversals(v, fs).into_iter().map(|(k, _)| k));
+    out.sort_unstable();
+    out.dedup();
+    out
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -49,5 +71,14 @@ mod tests {
         let r = reversals(&v, fs);
         assert_eq!(r.len(), 3, "{r:?}");
         assert!(r.iter().all(|&(k, _)| k < 200), "{r:?}");
+        // and the motion changes there, at the start, before and after the rest, at the end
+        let m = motion_changes(&v, fs);
+        let expected: Vec<usize> = [1, 199, 300, 349]
+            .into_iter()
+            .chain(r.iter().map(|&(k, _)| k))
+            .collect::<std::collections::BTreeSet<_>>()
+            .into_iter()
+            .collect();
+        assert_eq!(m, expected);
     }
 }

@@ -243,8 +243,8 @@ fn screen_record(spec: &TestSpec, r: &mut Record, fs: f64, out: &mut Vec<Finding
 }
 
 /// Non-finite samples, spikes and flat channels of one channel; false to exclude. Spikes
-/// that all follow the reversals of a periodic test's reference (`windows`) are its
-/// response and are kept, with a note ([`pulses`]).
+/// that all follow changes of a periodic test's reference motion (`windows`: its
+/// reversals, set-off and stop) are its response and are kept, with a note ([`pulses`]).
 fn screen_channel(
     name: &str,
     x: &mut [f64],
@@ -265,8 +265,9 @@ fn screen_channel(
     let (mut spikes, median) = spikes(x);
     if !spikes.is_empty() && windows.is_some_and(|w| w.hold(x, median, &spikes)) {
         let msg = format!(
-            "{} samples beyond {SPIKE_ROBUST_SIGMAS} robust sigmas, all shortly after \
-             reversals of the reference: the table's response (impacts, chatter), not glitches",
+            "{} samples beyond {SPIKE_ROBUST_SIGMAS} robust sigmas, all shortly after the \
+             reference reverses, sets off or stops: the table's response (impacts, chatter), \
+             not glitches",
             spikes.len()
         );
         out.push(finding(name, Action::KeptAsResponse, msg));
