@@ -148,10 +148,9 @@ mod tests {
             let a = glitched.records[0].acceleration_m_s2.as_mut().unwrap();
             a[mid] = 40.0;
             let s = screen(&glitched);
-            let repaired = s
-                .findings
-                .iter()
-                .any(|f| f.channel == "acceleration_m_s2" && f.action == Action::Repaired);
+            let repaired = s.findings.iter().any(|f| {
+                f.test == "S1" && f.channel == "acceleration_m_s2" && f.action == Action::Repaired
+            });
             assert!(repaired, "seed {seed}: {:?}", s.findings);
         }
     }
