@@ -9,11 +9,17 @@ const REVERSAL_MAX_S: f64 = 0.1;
 /// reference velocity wanders about zero at rest.
 const REST_SPEED_FRACTION: f64 = 1e-3;
 
+/// The speed below which the reference velocity `v` counts as at rest
+/// ([`REST_SPEED_FRACTION`] of its largest).
+fn rest_speed(v: &[f64]) -> f64 {
+    REST_SPEED_FRACTION * v.iter().fold(0.0f64, |m, x| m.max(x.abs()))
+}
+
 /// The reversals of the reference velocity `v` sampled at `fs`: the first sample of each
 /// new direction and that direction (+-1), where the sign changes within
 /// [`REVERSAL_MAX_S`].
 pub fn reversals(v: &[f64], fs: f64) -> Vec<(usize, f64)> {
-    let rest = REST_SPEED_FRACTION * v.iter().fold(0.0f64, |m, x| m.max(x.abs()));
+    let rest = rest_speed(v);
     let mut out = Vec::new();
     let mut last: Option<(usize, f64)> = None;
     for (k, &x) in v.iter().enumerate() {
@@ -35,7 +41,7 @@ pub fn reversals(v: &[f64], fs: f64) -> Vec<(usize, f64)> {
 /// from rest or comes to rest (a rest being a pause of at least [`REVERSAL_MAX_S`], or the
 /// record's ends), sorted. A play between rod and table is crossed at each.
 pub fn motion_changes(v: &[f64], fs: f64) -> Vec<usize> {
-    let rest = REST_SPEED_FRACTION * v.iter().fold(0.0f64, |m, x| m.max(x.abs()));
+    let rest = rest_speed(v);
     let moving: Vec<usize> = (0..v.len()).filter(|&k| v[k].abs() > rest).collect();
     let (Some(&first), Some(&last)) = (moving.first(), moving.last()) else {
         return Vec::new();
