@@ -193,6 +193,7 @@ struct PlayFit<'a> {
     ranges: Vec<Range>,
     gap_span: [f64; 2],
     mass_held: Option<(usize, f64)>,
+    t0: std::time::Instant,
 }
 
 impl<'a> PlayFit<'a> {
@@ -230,12 +231,14 @@ impl<'a> PlayFit<'a> {
             ranges,
             gap_span,
             mass_held,
+            t0: std::time::Instant::now(),
         }
     }
 
     fn trace(&self, what: &str) {
         if super::trace_enabled() {
-            eprintln!("  free_play {what}");
+            let secs = self.t0.elapsed().as_secs_f64();
+            eprintln!("  free_play {what} after {secs:.1} s");
         }
     }
 
@@ -331,8 +334,10 @@ impl<'a> PlayFit<'a> {
         start: &EffectValues,
         variants: &[ActuatorModel],
     ) -> Option<(Scored, Params)> {
-        let polished: Vec<(Scored, Params)> = self
-            .best_starts(bases, start, variants)
+        let starts = self.best_starts(bases, start, variants);
+        let firsts: Vec<f64> = starts.iter().map(|s| s.2).collect();
+        self.trace(&format!("best starts: {firsts:?}"));
+        let polished: Vec<(Scored, Params)> = starts
             .into_par_iter()
             .map(|(x0, base, first)| (self.polish(&base, (first, x0)), base))
             .collect();

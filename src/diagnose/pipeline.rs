@@ -150,15 +150,12 @@ impl Diagnoser<'_> {
         (step0, total): (usize, usize),
     ) -> Vec<Candidate> {
         let done = std::sync::atomic::AtomicUsize::new(step0);
-        let mut candidates: Vec<Candidate> = effects
-            .par_iter()
-            .filter_map(|&e| {
-                let cand = self.fitted(e, &bases, missed, hold);
-                let n = done.fetch_add(1, std::sync::atomic::Ordering::Relaxed);
-                self.tick(n + 1, total, &format!("fitted {}", e.name()));
-                cand
-            })
-            .collect();
+        let mut candidates: Vec<Candidate> = longest_first(effects, |e| {
+            let cand = self.fitted(e, &bases, missed, hold);
+            let n = done.fetch_add(1, std::sync::atomic::Ordering::Relaxed);
+            self.tick(n + 1, total, &format!("fitted {}", e.name()));
+            cand
+        });
         let Some(k) = candidates
             .iter()
             .position(|c| c.effect.next_mode().is_some())
@@ -355,3 +352,26 @@ pub(super) use select::{
 
 #[cfg(test)]
 mod tests;
+
+/// `fit` of every effect of `effects` on the pool, started longest first
+/// ([`Effect::fitting_rank`]: a FIFO scope hands the cores the spawned fits in order),
+/// the results in `effects`' order.
+fn longest_first<T: Send + Sync>(
+    effects: &[Effect],
+    fit: impl Fn(Effect) -> Option<T> + Sync,
+) -> Vec<T> {
+    let mut order: Vec<usize> = (0..effects.len()).collect();
+    order.sort_by_key(|&k| effects[k].fitting_rank());
+    let slots: Vec<std::sync::OnceLock<T>> = effects.iter().map(|_| Default::default()).collect();
+    rayon::scope_fifo(|s| {
+        for k in order {
+            let (slot, fit) = (&slots[k], &fit);
+            s.spawn_fifo(move |_| {
+                if let Some(v) = fit(effects[k]) {
+                    let _ = slot.set(v);
+                }
+            });
+        }
+    });
+    slots.into_iter().filter_map(|s| s.into_inner()).collect()
+}

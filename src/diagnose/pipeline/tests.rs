@@ -190,3 +190,19 @@ fn further_modes_are_skipped_only_far_behind_another_candidate() {
     // the 12-Hz foundation of seed 453: one mode at 14.1, the foundation at 0.67
     assert!(!super::further_modes_may_matter(14.084, 0.671));
 }
+
+/// The fits run longest first, but their results come back in the search's order, the
+/// effects fitted to nothing left out.
+#[test]
+fn fits_started_longest_first_return_in_the_search_order() {
+    let effects = Effect::search_order();
+    let ranks: Vec<u8> = effects.iter().map(|e| e.fitting_rank()).collect();
+    assert!(ranks.contains(&0) && ranks.contains(&2), "ranks {ranks:?}");
+    let fitted = super::longest_first(&effects, |e| (e.fitting_rank() > 0).then(|| e.name()));
+    let expected: Vec<&str> = effects
+        .iter()
+        .filter(|e| e.fitting_rank() > 0)
+        .map(|e| e.name())
+        .collect();
+    assert_eq!(fitted, expected);
+}

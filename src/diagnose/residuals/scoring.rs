@@ -12,6 +12,7 @@ use super::Part;
 use crate::campaign::{Campaign, Record};
 use crate::params::Params;
 use crate::Outputs;
+use rayon::prelude::*;
 
 /// Window of the predictive score, samples (0.25 s at 512 Hz: short beside a chatter
 /// burst's growth, long enough for a power estimate within about 12 %).
@@ -104,8 +105,14 @@ pub fn scores(
         residual: Cells::default(),
         deviation: super::ratios(r, &pred.locked, noise, part),
     };
-    for ch in Channel::ALL {
-        match channel_bands(c, i, pred, noise, part, ch) {
+    // the channels side by side: a search's last polishes score few tests, and the band
+    // splits would otherwise leave a core idle
+    let banded: Vec<CellBands> = Channel::ALL
+        .par_iter()
+        .map(|&ch| channel_bands(c, i, pred, noise, part, ch))
+        .collect();
+    for (ch, bands) in Channel::ALL.into_iter().zip(banded) {
+        match bands {
             CellBands::Absent => {}
             CellBands::Diverged => {
                 out.score[ch] = Cell::Diverged;
@@ -412,7 +419,6 @@ pub const FIT_SCORE_REALISATIONS: usize = 2;
 /// [`FIT_SCORE_REALISATIONS`] noise draws: the objective of the fits that cannot use
 /// sample-wise least squares (stick-slip, free play).
 pub fn score_sum(p: &Params, c: &Campaign, tests: &[usize], noise: &NoiseFloor, part: Part) -> f64 {
-    use rayon::prelude::*;
     if p.validate().is_err() {
         return f64::INFINITY;
     }
