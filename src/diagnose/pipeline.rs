@@ -340,19 +340,6 @@ fn further_modes_may_matter(specimen_score: f64, best_other: f64) -> bool {
     !(specimen_score > FURTHER_MODES_WITHIN * best_other)
 }
 
-mod polish;
-mod prune;
-mod rounds;
-mod select;
-pub(super) use rounds::diagnose_with;
-use select::best_candidate;
-pub(super) use select::{
-    COHERENT_MAJORITY, MAX_COHERENT_LEFT, MIN_COHERENT_REMOVED, UNRESOLVED_CHANGE,
-};
-
-#[cfg(test)]
-mod tests;
-
 /// `fit` of every effect of `effects` on the pool, started longest first
 /// ([`Effect::fitting_rank`]: a FIFO scope hands the cores the spawned fits in order),
 /// the results in `effects`' order.
@@ -368,6 +355,7 @@ fn longest_first<T: Send + Sync>(
             let (slot, fit) = (&slots[k], &fit);
             s.spawn_fifo(move |_| {
                 if let Some(v) = fit(effects[k]) {
+                    // each slot is set once, by its own fit
                     let _ = slot.set(v);
                 }
             });
@@ -375,3 +363,16 @@ fn longest_first<T: Send + Sync>(
     });
     slots.into_iter().filter_map(|s| s.into_inner()).collect()
 }
+
+mod polish;
+mod prune;
+mod rounds;
+mod select;
+pub(super) use rounds::diagnose_with;
+use select::best_candidate;
+pub(super) use select::{
+    COHERENT_MAJORITY, MAX_COHERENT_LEFT, MIN_COHERENT_REMOVED, UNRESOLVED_CHANGE,
+};
+
+#[cfg(test)]
+mod tests;
