@@ -158,7 +158,7 @@ fn fit_on_score(
                 trace.say("no gap read off the reversals: not fitted");
                 return None;
             };
-            fit_free_play(bases, sig, &start, ctx)?
+            fit_free_play(bases, sig, &start, ctx, trace)?
         }
     };
     trace.say(&format!(

@@ -5,7 +5,7 @@ use super::baseline::{
     candidate_range, mass_is_scale, refine_output_error, with_actuator, BaselineParameter, Range,
     REFINED_FRICTION,
 };
-use super::candidates::{FitContext, ScoreFit};
+use super::candidates::{FitContext, FitTrace, ScoreFit};
 use super::effect::Effect;
 use super::effect_values::{EffectBounds, EffectValues};
 use super::part::Part;
@@ -105,8 +105,9 @@ pub(super) fn fit_free_play(
     sig: &[usize],
     start: &EffectValues,
     ctx: &FitContext,
+    trace: &FitTrace,
 ) -> Option<ScoreFit> {
-    let fit = PlayFit::new(bases, sig, start, ctx);
+    let fit = PlayFit::new(bases, sig, start, ctx, trace);
     fit.trace(&format!("start: {:?}", start.layout()));
     let (mut best, mut base) = fit.polished(bases, start, &ActuatorModel::ALL)?;
     fit.trace(&format!("polished: {best:?}"));
@@ -193,7 +194,7 @@ struct PlayFit<'a> {
     ranges: Vec<Range>,
     gap_span: [f64; 2],
     mass_held: Option<(usize, f64)>,
-    t0: std::time::Instant,
+    fit_trace: &'a FitTrace,
 }
 
 impl<'a> PlayFit<'a> {
@@ -202,6 +203,7 @@ impl<'a> PlayFit<'a> {
         sig: &'a [usize],
         start: &EffectValues,
         ctx: &'a FitContext<'a>,
+        fit_trace: &'a FitTrace,
     ) -> Self {
         let bounds = Effect::of(&crate::effects::free_play::EFFECT).bounds(&bases[0]);
         // the gap held within the reading's span: beyond it the nearest gap in the span
@@ -231,15 +233,12 @@ impl<'a> PlayFit<'a> {
             ranges,
             gap_span,
             mass_held,
-            t0: std::time::Instant::now(),
+            fit_trace,
         }
     }
 
     fn trace(&self, what: &str) {
-        if super::trace_enabled() {
-            let secs = self.t0.elapsed().as_secs_f64();
-            eprintln!("  free_play {what} after {secs:.1} s");
-        }
+        self.fit_trace.say(what);
     }
 
     /// `x` with the gap in its span and a held table mass at its value.
